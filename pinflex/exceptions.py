@@ -1,0 +1,141 @@
+"""Named exceptions and warnings of pinflex.
+
+Every error derives from :class:`PinflexError` and says what was wrong, what was expected
+and how to fix it. Warnings derive from :class:`PinflexWarning`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+
+class PinflexError(Exception):
+    """Root of all pinflex errors."""
+
+
+class InvalidDescription(PinflexError):
+    """The robot description (URDF or its pinflex annotations) is malformed."""
+
+
+class LinkNotFound(InvalidDescription):
+    """A link name does not exist in the robot description."""
+
+    def __init__(self, name: str, available: Iterable[str]):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(
+            f"link '{name}' is not in the robot description; available links: "
+            f"{', '.join(self.available)}"
+        )
+
+
+class JointNotFound(InvalidDescription):
+    """A joint name does not exist in the robot description."""
+
+    def __init__(self, name: str, available: Iterable[str]):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(
+            f"joint '{name}' is not in the robot description; available joints: "
+            f"{', '.join(self.available)}"
+        )
+
+
+class InvalidBeamProperty(InvalidDescription):
+    """A beam property is missing, non-finite or non-positive, or a beam has zero length."""
+
+
+class UnsupportedJoint(InvalidDescription):
+    """A joint type that the ERLS layer does not handle (only revolute, prismatic, fixed)."""
+
+
+class DesignVariableNotFound(PinflexError):
+    """A design variable name is unknown."""
+
+    def __init__(self, name: str, available: Iterable[str]):
+        self.name = name
+        self.available = sorted(available)
+        super().__init__(
+            f"design variable '{name}' does not exist; declared design variables: "
+            f"{', '.join(self.available) or '(none)'}"
+        )
+
+
+class DesignVariableOutOfBounds(PinflexError):
+    """A design variable value lies outside its declared bounds."""
+
+    def __init__(self, name: str, value: float, lower: float, upper: float):
+        self.name, self.value, self.lower, self.upper = name, value, lower, upper
+        super().__init__(
+            f"design variable '{name}' = {value:g} is outside its bounds "
+            f"[{lower:g}, {upper:g}]; choose a value inside the bounds or widen them in the URDF"
+        )
+
+
+class ConfigurationError(PinflexError):
+    """Joint values of the wrong shape or outside what the model accepts."""
+
+
+class PlanarModelError(PinflexError):
+    """The planar option was asked for a robot that does not move in one plane."""
+
+
+class EigenSolverError(PinflexError):
+    """The generalized eigenproblem could not be solved reliably."""
+
+
+class RepeatedEigenvalue(PinflexError):
+    """A Taylor expansion was asked at a repeated or nearly repeated eigenvalue."""
+
+    def __init__(self, mode: int, cluster: Iterable[int], eigvals: Iterable[float], gap: float):
+        self.mode = mode
+        self.cluster = list(cluster)
+        self.eigvals = list(eigvals)
+        self.gap = gap
+        super().__init__(
+            f"mode {mode} belongs to a cluster of nearly equal eigenvalues (modes {self.cluster}, "
+            f"eigenvalues {', '.join(f'{v:.9g}' for v in self.eigvals)}, relative gap {gap:.2e}); "
+            "the eigenvalue Taylor recursion is singular there: expand at another point or "
+            "break the symmetry"
+        )
+
+
+class TaylorRadiusExceeded(PinflexError):
+    """A Taylor model was evaluated beyond its estimated convergence radius."""
+
+
+class AssignmentInfeasible(PinflexError):
+    """The assignment QP has no feasible point (or the solver failed)."""
+
+    def __init__(self, message: str, problem=None, result=None):
+        self.problem = problem
+        self.result = result
+        super().__init__(message)
+
+
+class NewtonDivergence(PinflexError):
+    """Newton's method for a static equilibrium did not converge."""
+
+
+class MissingDependency(PinflexError, ImportError):
+    """An optional dependency is not installed."""
+
+    def __init__(self, package: str, purpose: str):
+        self.package = package
+        super().__init__(f"{purpose} needs '{package}': install it with `pip install {package}`")
+
+
+class PinflexWarning(UserWarning):
+    """Root of all pinflex warnings."""
+
+
+class TaylorRadiusWarning(PinflexWarning):
+    """A Taylor model is being evaluated far from its expansion point."""
+
+
+class AssignmentWarning(PinflexWarning):
+    """An assignment answer is feasible but misses its target by more than asked."""
+
+
+class TrajectoryWarning(PinflexWarning):
+    """A trajectory leaves the joint limits or is otherwise suspicious."""
