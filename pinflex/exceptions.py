@@ -139,3 +139,19 @@ class AssignmentWarning(PinflexWarning):
 
 class TrajectoryWarning(PinflexWarning):
     """A trajectory leaves the joint limits or is otherwise suspicious."""
+
+
+class InvalidBeam(InvalidBeamProperty):
+    """A PRBDM beam planform is malformed (vertices, widths, thickness or material)."""
+
+
+class InvalidChain(PinflexError):
+    """PRBDM chain parameters are malformed (link lengths off the simplex, non-positive springs)."""
+
+
+class TruthNotConverged(PinflexError):
+    """A reference ("truth") beam solution failed its own convergence or consistency check."""
+
+
+class MappingFailed(PinflexError):
+    """No multistart run of a PRBDM mapping produced a usable model."""
