@@ -1,0 +1,202 @@
+"""Beam sections and 12-dof Euler–Bernoulli element matrices.
+
+Conventions (used throughout pinflex):
+
+* A beam has its own frame: ``x`` along the axis (root to tip), ``y`` and ``z`` the principal
+  axes of the section. ``Iy`` is the second moment about ``y`` (bending in the x–z plane,
+  deflection ``w`` along ``z``), ``Iz`` the one about ``z`` (bending in the x–y plane,
+  deflection ``v`` along ``y``).
+* Node dofs are ``(ux, uy, uz, θx, θy, θz)``: a small translation and a small rotation vector,
+  both in beam axes, so that an element has 12 dofs ``(node a, node b)``.
+* Kinematics: ``θz = dv/dx`` and ``θy = −dw/dx``; axial and torsional fields are linear,
+  bending fields cubic Hermite. Consistent mass with translational line mass ``ρA`` and
+  torsional rotary inertia ``ρIp`` (rotary inertia of bending is neglected, as in the
+  Euler–Bernoulli model).
+
+Element matrices are computed by Gauss–Legendre quadrature of the shape functions, which
+is exact (to round-off) for these polynomial integrands.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pinflex.exceptions import InvalidBeamProperty
+
+_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
+_GAUSS_XI = 0.5 * (_GAUSS_X + 1.0)
+_GAUSS_WXI = 0.5 * _GAUSS_W
+
+
+@dataclass(frozen=True)
+class Section:
+    """Cross-section properties of a straight beam.
+
+    Attributes:
+        A: Area [m^2].
+        Iy: Second moment of area about the section's y axis [m^4].
+        Iz: Second moment of area about the section's z axis [m^4].
+        J: Torsion constant [m^4].
+    """
+
+    A: float
+    Iy: float
+    Iz: float
+    J: float
+
+    def __post_init__(self):
+        for name in ("A", "Iy", "Iz", "J"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value <= 0.0:
+                raise InvalidBeamProperty(
+                    f"section property {name} = {value!r} must be a positive finite number [SI]"
+                )
+
+    @property
+    def Ip(self) -> float:
+        """Polar moment of area Iy + Iz [m^4] (rotary inertia of torsion)."""
+        return self.Iy + self.Iz
+
+
+def solid_circle(diameter_m: float) -> Section:
+    """Section of a solid circular rod of the given diameter [m]."""
+    _positive("diameter", diameter_m)
+    r = 0.5 * diameter_m
+    i = np.pi * r**4 / 4.0
+    return Section(A=np.pi * r**2, Iy=i, Iz=i, J=2.0 * i)
+
+
+def hollow_circle(outer_diameter_m: float, inner_diameter_m: float) -> Section:
+    """Section of a circular tube [m]; the inner diameter must be below the outer one."""
+    _positive("outer_diameter", outer_diameter_m)
+    if not 0.0 <= inner_diameter_m < outer_diameter_m:
+        raise InvalidBeamProperty(
+            f"inner_diameter = {inner_diameter_m!r} must satisfy 0 <= inner < outer = "
+            f"{outer_diameter_m!r} [m]"
+        )
+    ro, ri = 0.5 * outer_diameter_m, 0.5 * inner_diameter_m
+    i = np.pi * (ro**4 - ri**4) / 4.0
+    return Section(A=np.pi * (ro**2 - ri**2), Iy=i, Iz=i, J=2.0 * i)
+
+
+def rectangle(width_m: float, height_m: float) -> Section:
+    """Solid rectangle: ``width`` along the section's y axis, ``height`` along z [m].
+
+    The torsion constant uses the classical series approximation of Saint-Venant torsion
+    (accurate to about 0.5 %).
+    """
+    _positive("width", width_m)
+    _positive("height", height_m)
+    b, h = width_m, height_m
+    a_long, a_short = max(b, h), min(b, h)
+    ratio = a_short / a_long
+    j = a_long * a_short**3 * (1.0 / 3.0 - 0.21 * ratio * (1.0 - ratio**4 / 12.0))
+    return Section(A=b * h, Iy=b * h**3 / 12.0, Iz=h * b**3 / 12.0, J=j)
+
+
+def _positive(name: str, value: float) -> None:
+    if not np.isfinite(value) or value <= 0.0:
+        raise InvalidBeamProperty(f"{name} = {value!r} must be a positive finite number [m]")
+
+
+def shape_matrix(length_m: float, xi: np.ndarray) -> np.ndarray:
+    """Interpolation of the 12 element dofs to the displacement and rotation on the axis.
+
+    Args:
+        length_m: Element length L [m].
+        xi: Points along the element, ``x / L`` in [0, 1], shape (k,).
+
+    Returns:
+        Array (k, 6, 12): rows ``(ux, uy, uz, θx, θy, θz)`` at each point, in beam axes.
+    """
+    xi = np.atleast_1d(np.asarray(xi, dtype=float))
+    L = float(length_m)
+    n1, n2 = 1.0 - xi, xi
+    h1 = 1.0 - 3.0 * xi**2 + 2.0 * xi**3
+    h2 = L * (xi - 2.0 * xi**2 + xi**3)
+    h3 = 3.0 * xi**2 - 2.0 * xi**3
+    h4 = L * (-(xi**2) + xi**3)
+    d1 = (-6.0 * xi + 6.0 * xi**2) / L
+    d2 = 1.0 - 4.0 * xi + 3.0 * xi**2
+    d3 = (6.0 * xi - 6.0 * xi**2) / L
+    d4 = -2.0 * xi + 3.0 * xi**2
+    N = np.zeros((xi.size, 6, 12))
+    N[:, 0, 0], N[:, 0, 6] = n1, n2  # axial
+    N[:, 3, 3], N[:, 3, 9] = n1, n2  # torsion
+    # x-y plane: v with θz = dv/dx
+    N[:, 1, 1], N[:, 1, 5], N[:, 1, 7], N[:, 1, 11] = h1, h2, h3, h4
+    N[:, 5, 1], N[:, 5, 5], N[:, 5, 7], N[:, 5, 11] = d1, d2, d3, d4
+    # x-z plane: w with θy = -dw/dx
+    N[:, 2, 2], N[:, 2, 4], N[:, 2, 8], N[:, 2, 10] = h1, -h2, h3, -h4
+    N[:, 4, 2], N[:, 4, 4], N[:, 4, 8], N[:, 4, 10] = -d1, d2, -d3, d4
+    return N
+
+
+def _strain_matrix(length_m: float, xi: np.ndarray) -> np.ndarray:
+    """Generalised strains (ε, κx, κy, κz) per element dof, shape (k, 4, 12)."""
+    L = float(length_m)
+    B = np.zeros((xi.size, 4, 12))
+    B[:, 0, 0], B[:, 0, 6] = -1.0 / L, 1.0 / L  # axial strain du/dx
+    B[:, 1, 3], B[:, 1, 9] = -1.0 / L, 1.0 / L  # twist rate dθx/dx
+    c1 = (-6.0 + 12.0 * xi) / L**2
+    c2 = (-4.0 + 6.0 * xi) / L
+    c3 = (6.0 - 12.0 * xi) / L**2
+    c4 = (-2.0 + 6.0 * xi) / L
+    # curvature about z: d2v/dx2 ; curvature about y: d2w/dx2 (sign irrelevant in energy)
+    B[:, 3, 1], B[:, 3, 5], B[:, 3, 7], B[:, 3, 11] = c1, c2, c3, c4
+    B[:, 2, 2], B[:, 2, 4], B[:, 2, 8], B[:, 2, 10] = c1, -c2, c3, -c4
+    return B
+
+
+def element_stiffness(
+    length_m: float, EA: float, GJ: float, EIy: float, EIz: float
+) -> np.ndarray:
+    """Stiffness matrix (12, 12) of a spatial Euler–Bernoulli element in beam axes.
+
+    Args:
+        length_m: Element length [m].
+        EA: Axial rigidity [N].
+        GJ: Torsional rigidity [N m^2].
+        EIy: Bending rigidity about y (x–z plane) [N m^2].
+        EIz: Bending rigidity about z (x–y plane) [N m^2].
+    """
+    B = _strain_matrix(length_m, _GAUSS_XI)
+    D = np.diag([EA, GJ, EIy, EIz])
+    w = _GAUSS_WXI * length_m
+    return np.einsum("k,kai,ab,kbj->ij", w, B, D, B)
+
+
+def element_mass(length_m: float, rhoA: float, rhoIp: float) -> np.ndarray:
+    """Consistent mass matrix (12, 12) of a spatial Euler–Bernoulli element in beam axes.
+
+    Args:
+        length_m: Element length [m].
+        rhoA: Mass per unit length [kg/m].
+        rhoIp: Torsional rotary inertia per unit length [kg m].
+    """
+    N = shape_matrix(length_m, _GAUSS_XI)
+    w = _GAUSS_WXI * length_m
+    Nt = N[:, :3, :]
+    Nr = N[:, 3, :]
+    return rhoA * np.einsum("k,kai,kaj->ij", w, Nt, Nt) + rhoIp * np.einsum(
+        "k,ki,kj->ij", w, Nr, Nr
+    )
+
+
+def assemble_line(blocks: np.ndarray) -> np.ndarray:
+    """Assemble element matrices of a straight chain of elements.
+
+    Args:
+        blocks: Element matrices (ne, 12, 12), element e joining nodes e and e+1.
+
+    Returns:
+        The (6 (ne+1), 6 (ne+1)) matrix over all node dofs.
+    """
+    ne = blocks.shape[0]
+    n = 6 * (ne + 1)
+    rows = (6 * np.arange(ne))[:, None] + np.arange(12)[None, :]
+    out = np.zeros((n, n))
+    np.add.at(out, (rows[:, :, None], rows[:, None, :]), blocks)
+    return out
