@@ -155,3 +155,48 @@ class TruthNotConverged(PinflexError):
 
 class MappingFailed(PinflexError):
     """No multistart run of a PRBDM mapping produced a usable model."""
+
+
+class InvalidTrajectory(PinflexError):
+    """A trajectory has the wrong shape, non-finite values or times that do not increase."""
+
+
+class JointLimitsExceeded(InvalidTrajectory):
+    """Trajectory samples lie outside the joint limits."""
+
+    def __init__(self, samples, joints, values, lower, upper):
+        self.samples = [int(k) for k in samples]
+        self.joints = list(joints)
+        self.values = [float(v) for v in values]
+        rows = list(zip(self.samples, self.joints, self.values, lower, upper))[:5]
+        shown = "; ".join(
+            f"sample {k}, {j} = {v:.6g} not in [{lo:.6g}, {hi:.6g}]" for k, j, v, lo, hi in rows
+        )
+        more = f" (and {len(self.samples) - 5} more)" if len(self.samples) > 5 else ""
+        super().__init__(
+            f"{len(self.samples)} joint values outside the limits: {shown}{more}; "
+            "change the trajectory or the joint limits"
+        )
+
+
+class InvalidPath(PinflexError):
+    """A workspace path specification (segments, arcs, timing) is malformed."""
+
+
+class IKNotConverged(PinflexError):
+    """Inverse kinematics did not reach a target point."""
+
+    def __init__(self, sample, point, residual_m, q, tol_m):
+        self.sample = int(sample)
+        self.point = [float(v) for v in point]
+        self.residual_m = float(residual_m)
+        self.q = None if q is None else [float(v) for v in q]
+        super().__init__(
+            f"inverse kinematics did not reach point {self.point} [m] at sample {self.sample}: "
+            f"residual {self.residual_m:.3g} m > tolerance {tol_m:.3g} m; the point may be out of "
+            "reach or the previous sample too far away (sample the path more densely)"
+        )
+
+
+class InvalidAssignmentProblem(PinflexError):
+    """Inputs of the assignment QP have inconsistent shapes or non-finite values."""
