@@ -463,6 +463,14 @@ class FlexibleModel:
                     raise DesignVariableOutOfBounds(d.name, float(v), d.lower, d.upper)
         return y
 
+    def joint_index(self, name: str) -> int:
+        """Index of a moving joint in the coordinate vector."""
+        if name not in self.joint_names:
+            from pinflex.exceptions import JointNotFound
+
+            raise JointNotFound(name, self.joint_names)
+        return self.joint_names.index(name)
+
     def pin_q(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio joint values (nv,) of user coordinates (relative angles)."""
         return self.coord_map @ q
