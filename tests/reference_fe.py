@@ -613,13 +613,11 @@ def spatial_frame_model(
     n_full = 6 * len(nodes)
 
     # Independent coordinates -> full dofs: collect the columns of T.
-    columns: list[dict[int, float]] = []
+    columns: list[dict[int, float]] = []  # one {row: value} per independent coordinate
+    add = columns.append
 
-    def add(entries: dict[int, float]) -> None:
-        columns.append(entries)
-
-    def add_identity(row0: int, rows: Sequence[int]) -> None:
-        for r in rows:
+    def add_identity(row0: int) -> None:
+        for r in range(6):
             add({row0 + r: 1.0})
 
     n_rigid = 0
@@ -630,10 +628,10 @@ def spatial_frame_model(
     for i, b in enumerate(beams):
         start = 6 * first_node[i]
         for j in range(1, b.n_elements):
-            add_identity(start + 6 * j, range(6))
+            add_identity(start + 6 * j)
         end = start + 6 * b.n_elements
         if i == n_beams - 1:
-            add_identity(end, range(6))
+            add_identity(end)
             continue
         nxt = 6 * first_node[i + 1]
         axis = _joint_axis(joints[i], f"joint {i}")
