@@ -77,6 +77,7 @@ class _FlexPlan:
     mass: np.ndarray  # (6(N+1), 6(N+1)) assembled consistent mass
     stiffness: np.ndarray  # (6(N+1), 6(N+1)) assembled stiffness
     nodes: np.ndarray  # (N+1, 3) node positions in the link frame [m]
+    rows: np.ndarray  # node-dof rows used in the assembly (in-plane ones in planar mode)
 
 
 @dataclass(frozen=True)
@@ -309,6 +310,18 @@ class FlexibleModel:
         for link, spec, cols in layout:
             flex_plans[link] = self._flex_plan(spec, cols, node_dofs)
         self._flex = flex_plans
+        # node-dof rows kept in the assembly: the in-plane ones in planar mode (out-of-plane
+        # rows vanish there, and the beam decouples in- and out-of-plane motion)
+        self._assembly_arrays = {
+            link: {
+                "sel": p.sel[p.rows],
+                "root": p.root[p.rows],
+                "jac": p.jac[p.rows],
+                "mass": p.mass[np.ix_(p.rows, p.rows)],
+                "stiffness": p.stiffness[np.ix_(p.rows, p.rows)],
+            }
+            for link, p in flex_plans.items()
+        }
         self.x_names = tuple(
             f"{link}.n{k + 1}.{'u' if d < 3 else 'r'}{'xyz'[d % 3]}"
             for link, spec, _ in layout
@@ -372,7 +385,8 @@ class FlexibleModel:
         root = np.zeros((6 * (n + 1), 6))
         root[:6] = rotate_twist(rb.T)
         jac = np.concatenate([rotate_twist(rb.T) @ translate_twist(p) for p in nodes])
-        return _FlexPlan(spec.link, spec, cols, sel, root, jac, M, K, nodes)
+        rows = (6 * np.arange(n + 1)[:, None] + np.asarray(node_dofs)[None, :]).ravel()
+        return _FlexPlan(spec.link, spec, cols, sel, root, jac, M, K, nodes, rows)
 
     def _attachment(self, link: str, point: np.ndarray) -> _Attachment:
         """Elastic twist of a point given in the frame of ``link`` (in link axes)."""
@@ -525,10 +539,11 @@ class FlexibleModel:
         K = None
         for link, plan in self._flex.items():
             e = twist[link]
-            bx = alg.const(plan.sel) if e is None else alg.const(plan.sel) + plan.root @ e
-            w = np.concatenate([bx, plan.jac @ terms.jac[link]], axis=-1)
-            m = alg.mm(np.swapaxes(w, -1, -2), plan.mass @ w)
-            k = alg.mm(np.swapaxes(bx, -1, -2), plan.stiffness @ bx)
+            a = self._assembly_arrays[link]
+            bx = alg.const(a["sel"]) if e is None else alg.const(a["sel"]) + a["root"] @ e
+            w = np.concatenate([bx, a["jac"] @ terms.jac[link]], axis=-1)
+            m = alg.mm(np.swapaxes(w, -1, -2), a["mass"] @ w)
+            k = alg.mm(np.swapaxes(bx, -1, -2), a["stiffness"] @ bx)
             M = m if M is None else M + m
             K = k if K is None else K + k
         for link, inertia in self._inertias.items():
@@ -606,6 +621,7 @@ class FlexibleModel:
 
     # ------------------------------------------------------------------ modal analysis
     def _reduced(self, M: np.ndarray, K: np.ndarray):
+        """Elastic mass with the rigid coordinates condensed out, and Kxx."""
         nx = self.nx
         Mxx, Mxq, Mqq = M[..., :nx, :nx], M[..., :nx, nx:], M[..., nx:, nx:]
         if self.nv:
@@ -616,7 +632,7 @@ class FlexibleModel:
                     "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
                     "add inertia to the links it drives"
                 ) from exc
-            Z = np.linalg.solve(Lq, np.swapaxes(Mxq, -1, -2))
+            Z = np.linalg.inv(Lq) @ np.swapaxes(Mxq, -1, -2)
             Mred = Mxx - np.swapaxes(Z, -1, -2) @ Z
         else:
             Mred = Mxx
@@ -645,8 +661,9 @@ class FlexibleModel:
             L = np.linalg.cholesky(Mred)
         except np.linalg.LinAlgError as exc:
             raise EigenSolverError("the reduced elastic mass matrix is not positive") from exc
-        A = np.linalg.solve(L, np.swapaxes(np.linalg.solve(L, Kxx), -1, -2))
-        lam = np.linalg.eigvalsh(0.5 * (A + np.swapaxes(A, -1, -2)))
+        Li = np.linalg.inv(L)
+        A = Li @ Kxx @ np.swapaxes(Li, -1, -2)
+        lam = np.linalg.eigvalsh(A)
         if np.any(lam <= 0.0):
             raise EigenSolverError(
                 "a non-positive elastic eigenvalue appeared: the structure is not restrained "
