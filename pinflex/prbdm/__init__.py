@@ -1,0 +1,1 @@
+"""Pseudo-rigid-body dynamic models (PRBDM) of compliant beams (paper 001)."""

@@ -1,0 +1,311 @@
+"""Beam planforms for pseudo-rigid-body dynamic models (paper 001, Sec. 2.1).
+
+A planform is a polygon symmetric about the beam axis X, extruded to a uniform thickness
+``t`` along Z. The beam bends out of plane (about the width axis Y), so the bending second
+moment of area of a cross-section is :math:`I(x) = w(x) t^3 / 12` and its area
+:math:`A(x) = w(x) t`, with :math:`w(x)` the full width, piecewise linear between vertices.
+
+Modelling choice (recorded here because the paper leaves it open): the planform is treated as
+a 1D Euler-Bernoulli beam. Random planforms can be nearly as wide as they are long and can pinch
+to a near-hinge; plate effects (anticlastic curvature, the plate modulus
+:math:`E/(1-\\nu^2)`), shear deformation and torsion are not modelled. Symmetry about X means
+bending does not couple to torsion.
+
+Random planforms follow Sec. 2.1: ``p`` sorted uniform abscissae in (0, 1) with 0 and 1
+appended, ``p + 2`` uniform half-widths in (0, 1) scaled by ``max_half_width_m``, the curve
+reflected about X. The paper's "endpoint (0, 1)" is read as (1, 0): the root half-width is
+``Y[0]`` and the tip half-width ``Y[p + 1]``. The default ``max_half_width_m = 0.5`` keeps the
+width below the paper's 1 m panel limit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import InvalidBeam
+
+_GAUSS3_X, _GAUSS3_W = np.polynomial.legendre.leggauss(3)
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear elastic isotropic material.
+
+    Attributes:
+        youngs_modulus_pa: Young's modulus E [Pa].
+        density_kg_m3: Mass density rho [kg/m^3].
+        name: Label used in reports.
+    """
+
+    youngs_modulus_pa: float
+    density_kg_m3: float
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        for label, value in (("youngs_modulus_pa", self.youngs_modulus_pa),
+                             ("density_kg_m3", self.density_kg_m3)):
+            if not np.isfinite(value) or value <= 0.0:
+                raise InvalidBeam(
+                    f"material {label} = {value!r} must be a finite positive number; "
+                    "steel is E = 205e9 Pa, rho = 7850 kg/m^3"
+                )
+
+
+STEEL = Material(youngs_modulus_pa=205e9, density_kg_m3=7850.0, name="steel")
+
+
+def _readonly(values: np.ndarray) -> np.ndarray:
+    array = np.array(values, dtype=float)
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True)
+class Planform:
+    """A symmetric beam planform of uniform thickness, clamped at x = 0.
+
+    Attributes:
+        x_m: Vertex abscissae along the beam, shape (p + 2,), strictly increasing from 0 [m].
+        half_width_m: Half-width at each vertex, shape (p + 2,), positive [m].
+        thickness_m: Uniform thickness t along Z [m].
+        material: Beam material.
+        name: Label used in reports.
+    """
+
+    x_m: np.ndarray
+    half_width_m: np.ndarray
+    thickness_m: float
+    material: Material = STEEL
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        x = np.asarray(self.x_m, dtype=float)
+        y = np.asarray(self.half_width_m, dtype=float)
+        _validate_planform(x, y, self.thickness_m)
+        object.__setattr__(self, "x_m", _readonly(x))
+        object.__setattr__(self, "half_width_m", _readonly(y))
+
+    @property
+    def length_m(self) -> float:
+        """Beam length L [m]."""
+        return float(self.x_m[-1])
+
+    @property
+    def n_sections(self) -> int:
+        """Number of interior vertices p (the paper's section count)."""
+        return int(self.x_m.size - 2)
+
+    def width_m(self, s: np.ndarray | float) -> np.ndarray:
+        """Full width w(s) at abscissae s [m]."""
+        return 2.0 * np.interp(s, self.x_m, self.half_width_m)
+
+    def area_m2(self, s: np.ndarray | float) -> np.ndarray:
+        """Cross-section area A(s) = w(s) t [m^2]."""
+        return self.width_m(s) * self.thickness_m
+
+    def area_moment_m4(self, s: np.ndarray | float) -> np.ndarray:
+        """Out-of-plane bending second moment of area I(s) = w(s) t^3 / 12 [m^4]."""
+        return self.width_m(s) * self.thickness_m**3 / 12.0
+
+    def outline_m(self) -> np.ndarray:
+        """Closed planform polygon, shape (2 (p + 2) + 1, 2), counter-clockwise [m]."""
+        lower = np.column_stack([self.x_m, -self.half_width_m])
+        upper = np.column_stack([self.x_m[::-1], self.half_width_m[::-1]])
+        return np.vstack([lower, upper, lower[:1]])
+
+
+def _validate_planform(x: np.ndarray, y: np.ndarray, thickness_m: float) -> None:
+    if x.ndim != 1 or y.ndim != 1 or x.shape != y.shape:
+        raise InvalidBeam(
+            f"x_m has shape {x.shape} and half_width_m has shape {y.shape}; both must be 1D "
+            "arrays of the same length (one half-width per vertex)"
+        )
+    if x.size < 2:
+        raise InvalidBeam(f"a planform needs at least 2 vertices (root and tip), got {x.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise InvalidBeam("planform vertices and half-widths must be finite numbers")
+    if x[0] != 0.0:
+        raise InvalidBeam(f"the first vertex must be the clamped root at x = 0, got {x[0]:g} m")
+    steps = np.diff(x)
+    if np.any(steps <= 0.0):
+        bad = int(np.argmin(steps))
+        raise InvalidBeam(
+            f"vertex abscissae must be strictly increasing; x[{bad}] = {x[bad]:g} m and "
+            f"x[{bad + 1}] = {x[bad + 1]:g} m (a zero-length beam or section); "
+            "remove or merge repeated vertices"
+        )
+    if np.any(y <= 0.0):
+        bad = int(np.argmin(y))
+        raise InvalidBeam(
+            f"half-widths must be positive; half_width_m[{bad}] = {y[bad]:g} m; a zero width "
+            "is a hinge that a beam model cannot represent"
+        )
+    if not np.isfinite(thickness_m) or thickness_m <= 0.0:
+        raise InvalidBeam(f"thickness_m = {thickness_m!r} must be a finite positive number [m]")
+
+
+def uniform_beam(length_m: float = 1.0, width_m: float = 0.3624, thickness_m: float = 0.040532,
+                 material: Material = STEEL) -> Planform:
+    """Rectangular planform; the defaults are paper 001's uniform steel test beam.
+
+    Args:
+        length_m: Beam length L [m].
+        width_m: Full width [m].
+        thickness_m: Thickness t [m].
+        material: Beam material.
+
+    Returns:
+        The planform, with two vertices.
+
+    Raises:
+        InvalidBeam: If a dimension is not a finite positive number.
+    """
+    for label, value in (("length_m", length_m), ("width_m", width_m)):
+        if not np.isfinite(value) or value <= 0.0:
+            raise InvalidBeam(f"{label} = {value!r} must be a finite positive number [m]")
+    return Planform(np.array([0.0, length_m]), np.full(2, 0.5 * width_m), thickness_m,
+                    material, name="uniform")
+
+
+def random_beam(seed: int, n_sections: int = 10, length_m: float = 1.0,
+                max_half_width_m: float = 0.5, thickness_m: float = 0.040532,
+                material: Material = STEEL) -> Planform:
+    """Seeded random planform of paper 001, Sec. 2.1.
+
+    Args:
+        seed: Seed of ``numpy.random.default_rng``.
+        n_sections: Number p of random interior vertices (the paper uses p = 10).
+        length_m: Beam length L [m]; the unit abscissae are scaled by it.
+        max_half_width_m: Scale of the unit half-widths [m].
+        thickness_m: Thickness t [m].
+        material: Beam material.
+
+    Returns:
+        The planform with p + 2 vertices.
+
+    Raises:
+        InvalidBeam: If p is negative or a dimension is not a finite positive number.
+    """
+    if int(n_sections) != n_sections or n_sections < 0:
+        raise InvalidBeam(f"n_sections = {n_sections!r} must be a non-negative integer")
+    for label, value in (("length_m", length_m), ("max_half_width_m", max_half_width_m)):
+        if not np.isfinite(value) or value <= 0.0:
+            raise InvalidBeam(f"{label} = {value!r} must be a finite positive number [m]")
+    rng = np.random.default_rng(seed)
+    interior = np.sort(rng.uniform(0.0, 1.0, int(n_sections)))
+    x = np.concatenate([[0.0], interior, [1.0]]) * length_m
+    y = rng.uniform(0.0, 1.0, int(n_sections) + 2) * max_half_width_m
+    return Planform(x, y, thickness_m, material, name=f"random(seed={seed}, p={n_sections})")
+
+
+@dataclass(frozen=True)
+class SegmentProperties:
+    """Rigid-body and bending properties of the beam between two abscissae.
+
+    Attributes:
+        start_m: Segment start along the beam [m].
+        end_m: Segment end along the beam [m].
+        mass_kg: Mass [kg].
+        com_m: Centre of mass abscissa along the beam (absolute) [m].
+        inertia_com_kg_m2: Principal rotational inertias about the centre of mass,
+            (Ixx, Iyy, Izz) with x along the beam and y the bending axis [kg m^2].
+        mean_area_moment_m4: Length-averaged bending second moment of area [m^4].
+        compliance_1_n_m: Series bending compliance int dx / (E I(x)) [1/(N m)].
+    """
+
+    start_m: float
+    end_m: float
+    mass_kg: float
+    com_m: float
+    inertia_com_kg_m2: tuple[float, float, float]
+    mean_area_moment_m4: float
+    compliance_1_n_m: float
+
+
+def _pieces(planform: Planform, start_m: float, end_m: float) -> np.ndarray:
+    inner = planform.x_m[(planform.x_m > start_m) & (planform.x_m < end_m)]
+    return np.concatenate([[start_m], inner, [end_m]])
+
+
+def _log_mean_inverse(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Mean of 1/v over a segment where v varies linearly from a to b."""
+    ratio = b / a
+    close = np.abs(ratio - 1.0) < 1e-6
+    safe = np.where(close, 2.0, ratio)
+    exact = np.log(safe) / np.where(close, 1.0, b - a)
+    u = ratio - 1.0
+    series = (1.0 - u / 2.0 + u * u / 3.0) / a
+    return np.where(close, series, exact)
+
+
+def segment_properties(planform: Planform, start_m: float, end_m: float) -> SegmentProperties:
+    """Mass, centre of mass, rotational inertia and bending compliance of a beam segment.
+
+    Integrals are exact: the width is linear between vertices and a 3-point Gauss rule
+    integrates polynomials up to degree 5 on every piece.
+
+    Args:
+        planform: The beam.
+        start_m: Segment start [m], 0 <= start < end.
+        end_m: Segment end [m], end <= L.
+
+    Returns:
+        The segment's properties.
+
+    Raises:
+        InvalidBeam: If the segment is empty or leaves the beam.
+    """
+    length = planform.length_m
+    if not (0.0 <= start_m < end_m <= length * (1.0 + 1e-12)):
+        raise InvalidBeam(
+            f"segment [{start_m:g}, {end_m:g}] m must satisfy 0 <= start < end <= L = {length:g} m"
+        )
+    end_m = min(end_m, length)
+    nodes = _pieces(planform, start_m, end_m)
+    a, b = nodes[:-1, None], nodes[1:, None]
+    s = 0.5 * (a + b) + 0.5 * (b - a) * _GAUSS3_X
+    weights = 0.5 * (b - a) * _GAUSS3_W
+    width = planform.width_m(s)
+    t = planform.thickness_m
+    rho = planform.material.density_kg_m3
+    dm = rho * t * width * weights
+    mass = float(dm.sum())
+    com = float((dm * s).sum() / mass)
+    ixx = float((dm * (width**2 + t**2) / 12.0).sum())
+    iyy = float((dm * ((s - com) ** 2 + t**2 / 12.0)).sum())
+    izz = float((dm * ((s - com) ** 2 + width**2 / 12.0)).sum())
+    inertia_ends = planform.area_moment_m4(nodes)
+    piece_lengths = np.diff(nodes)
+    mean_i = float(np.sum(piece_lengths * 0.5 * (inertia_ends[:-1] + inertia_ends[1:])))
+    inv_mean = _log_mean_inverse(inertia_ends[:-1], inertia_ends[1:])
+    compliance = float(np.sum(piece_lengths * inv_mean)) / planform.material.youngs_modulus_pa
+    return SegmentProperties(
+        start_m=float(start_m), end_m=float(end_m), mass_kg=mass, com_m=com,
+        inertia_com_kg_m2=(ixx, iyy, izz), mean_area_moment_m4=mean_i / (end_m - start_m),
+        compliance_1_n_m=compliance,
+    )
+
+
+def equivalent_bending_stiffness(planform: Planform) -> float:
+    """Uniform EI with the same linear tip compliance under a transverse tip force [N m^2].
+
+    :math:`EI_{eq} = L^3 / (3 \\int_0^L (L - x)^2 / EI(x)\\, dx)`; equal to EI for a uniform beam.
+    It scales tip loads of non-uniform beams: :math:`\\alpha = P L^2 / EI_{eq}`.
+    """
+    length = planform.length_m
+    x1, x2 = planform.x_m[:-1], planform.x_m[1:]
+    i1, i2 = planform.area_moment_m4(x1), planform.area_moment_m4(x2)
+    h = x2 - x1
+    k = (i2 - i1) / h
+    near = np.abs(i2 / i1 - 1.0) < 0.05
+    k_safe = np.where(near, 1.0, k)
+    d = (length - x1) * k_safe + i1
+    exact = (d**2 * np.log(i2 / i1) - 2.0 * d * (i2 - i1) + 0.5 * (i2**2 - i1**2)) / k_safe**3
+    x_gauss, w_gauss = np.polynomial.legendre.leggauss(12)
+    s = 0.5 * (x1 + x2)[:, None] + 0.5 * h[:, None] * x_gauss
+    gauss = np.sum(0.5 * h[:, None] * w_gauss * (length - s) ** 2
+                   / planform.area_moment_m4(s), axis=1)
+    integral = np.sum(np.where(near, gauss, exact)) / planform.material.youngs_modulus_pa
+    return float(length**3 / (3.0 * integral))
