@@ -96,6 +96,7 @@ class _ChildJoint:
     kind: str  # 'revolute', 'prismatic' or 'fixed'
     user_col: int  # index of the joint in pin velocity order (-1 when fixed)
     R_o: np.ndarray
+    xyz: np.ndarray
     axis: np.ndarray
     attach: _Attachment
     proj: np.ndarray  # (6, 6) removes the motion subspace (in child axes)
@@ -347,6 +348,7 @@ class FlexibleModel:
                     kind=kind,
                     user_col=vidx.get(jd.name, -1),
                     R_o=jd.rotation,
+                    xyz=jd.xyz,
                     axis=jd.axis,
                     attach=self._attachment(jd.parent, jd.xyz),
                     proj=proj,

@@ -1,0 +1,347 @@
+"""Parametric modal model: exact Taylor expansion of eigenvalues in pose and design.
+
+Paper 000 eq. (3)–(9). The Taylor coefficients of ``M(q, y)`` and ``K(q, y)`` come from the
+same ERLS assembly as the exact model (:meth:`pinflex.erls.FlexibleModel.assemble`), run in
+truncated Taylor arithmetic (:mod:`pinflex.jets`) instead of on numbers: the joint
+kinematics are propagated down the URDF tree as jets (a revolute joint's rotation is the
+exact series of ``I + sin θ [a]× + (1 − cos θ) [a]×²``, a prismatic joint's offset is linear),
+so every coefficient is exact to round-off. Design variables (point masses) enter ``M``
+linearly. The eigenvalue jets follow from the recursion of :mod:`pinflex.taylor_eig`.
+
+What is expanded: the eigenvalue ``λ = ω²`` [rad²/s²] of paper 000 eq. (2). The frequency
+polynomial ``f = √λ / 2π`` [Hz] is derived from it by exact jet arithmetic
+(:func:`pinflex.jets.sqrt`) and is available with ``quantity="freq_hz"``; which of the two is
+more linear in ``y`` is measured in ``benchmarks/bench_taylor.py``.
+
+Variables are user coordinates (see :class:`~pinflex.erls.FlexibleModel`): joint values in
+the model's convention, then design values [kg]. Only the joints and design variables asked
+for are expanded; the others stay at their expansion values.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pinflex import jets
+from pinflex.erls import FlexibleModel, _PoseTerms
+from pinflex.exceptions import ConfigurationError, TaylorRadiusWarning
+from pinflex.jets import JetSpace
+from pinflex.kinematics import axis_rotation, skew
+from pinflex.taylor_eig import eigen_jets
+
+
+class JetAlgebra:
+    """Taylor coefficients on the leading axis (see :class:`pinflex.erls.BatchAlgebra`)."""
+
+    def __init__(self, space: JetSpace):
+        self.space = space
+
+    def const(self, c: np.ndarray) -> np.ndarray:
+        """Jet of a constant array."""
+        return jets.constant(self.space, c)
+
+    def mm(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Truncated product of two matrix jets."""
+        return jets.matmul(self.space, a, b)
+
+
+def _angle_terms(model: FlexibleModel, joint_vars: dict[int, int], col: int):
+    """Variables and factors of δq_pin[col] = Σ_l C[col, l] δq_user[l]."""
+    return [(var, model.coord_map[col, l]) for l, var in joint_vars.items()
+            if model.coord_map[col, l] != 0.0]
+
+
+def _rotation_jet(space: JetSpace, axis: np.ndarray, angle0: float, terms) -> np.ndarray:
+    """Jet of the rotation about ``axis`` by ``angle0 + Σ c_k δx_k``."""
+    R = jets.constant(space, axis_rotation(axis, np.array([angle0]))[0])
+    k1 = skew(axis)
+    k2 = k1 @ k1
+    one = jets.constant(space, 1.0)
+    for var, c in terms:
+        s, co = jets.sin_cos_of_variable(space, var, 0.0)
+        scale = float(c) ** space.multi_indices[:, var]
+        s, co = s * scale, co * scale
+        step = (jets.constant(space, np.eye(3)) + s[:, None, None] * k1
+                + (one - co)[:, None, None] * k2)
+        R = jets.matmul(space, R, step)
+    return R
+
+
+def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
+              joint_vars: dict[int, int]) -> _PoseTerms:
+    """Jets of the ERLS pose terms (frame Jacobians, joint rotations) at ``q0``.
+
+    Args:
+        model: The flexible model.
+        space: Jet space.
+        q0: Expansion pose in user coordinates, (nv,).
+        joint_vars: Map user joint index -> jet variable index of the expanded joints.
+    """
+    nv, nc = model.nv, space.ncoef
+    q0p = model.coord_map @ q0
+    J = {model._order[0]: np.zeros((nc, 6, nv))}
+    rot, slide = {}, {}
+    for j in model._joints:
+        if j.kind == "revolute":
+            terms = _angle_terms(model, joint_vars, j.user_col)
+            R = j.R_o @ _rotation_jet(space, j.axis, q0p[j.user_col], terms)
+            t = jets.constant(space, j.xyz)
+            rot[j.name] = R
+        elif j.kind == "prismatic":
+            d = jets.constant(space, q0p[j.user_col])
+            for var, c in _angle_terms(model, joint_vars, j.user_col):
+                d = d + c * jets.variable(space, var, 0.0)
+            R = jets.constant(space, j.R_o)
+            offset = d[:, None] * (j.R_o @ j.axis)[None, :]
+            slide[j.name] = offset
+            t = jets.constant(space, j.xyz) + offset
+        else:
+            R = jets.constant(space, j.R_o)
+            t = jets.constant(space, j.xyz)
+        JP = J[j.parent]
+        if nv == 0:
+            J[j.child] = JP
+            continue
+        RT = np.swapaxes(R, -1, -2)
+        lin = JP[:, :3] - jets.matmul(space, skew(t), JP[:, 3:])
+        Jc = np.concatenate([jets.matmul(space, RT, lin), jets.matmul(space, RT, JP[:, 3:])],
+                            axis=1)
+        if j.kind == "revolute":
+            Jc[0, 3:, j.user_col] += j.axis
+        elif j.kind == "prismatic":
+            Jc[0, :3, j.user_col] += j.axis
+        J[j.child] = Jc
+    jac = {link: J[link] @ model.coord_map for link in model._carriers}
+    return _PoseTerms(jac, rot, slide)
+
+
+def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
+                joints: Sequence[str] | None = None, design: Sequence[str] | None = None):
+    """Exact Taylor coefficients of ``M(q, y)`` and ``K(q, y)`` at ``(q0, y0)``.
+
+    Args:
+        model: The flexible model.
+        q0: Expansion pose (user coordinates) [rad or m], (nv,).
+        y0: Expansion design values [kg] (default nominal).
+        order: Truncation order p.
+        joints: Names of the joints to expand (default all).
+        design: Names of the design variables to expand (default all).
+
+    Returns:
+        ``(space, M_jet, K_jet, joint_idx, design_idx)``: jets of shape (ncoef, ndof, ndof);
+        the variables are the listed joints then the listed design variables, in order.
+    """
+    q0 = model.check_q(q0).astype(float)
+    if q0.ndim != 1:
+        raise ConfigurationError("the expansion point must be a single pose")
+    y0 = model.check_y(y0)
+    joint_idx = [model.joint_index(n) for n in (model.joint_names if joints is None else joints)]
+    names = model.design_names if design is None else tuple(design)
+    design_idx = []
+    for n in names:
+        if n not in model.design_names:
+            from pinflex.exceptions import DesignVariableNotFound
+
+            raise DesignVariableNotFound(n, model.design_names)
+        design_idx.append(model.design_names.index(n))
+    nvars = len(joint_idx) + len(design_idx)
+    if nvars == 0:
+        raise ConfigurationError("expand at least one joint or design variable")
+    if order < 0:
+        raise ConfigurationError(f"order = {order} must be >= 0")
+    space = JetSpace(nvars, int(order))
+    joint_vars = {l: k for k, l in enumerate(joint_idx)}
+    terms = pose_jets(model, space, q0, joint_vars)
+    M, Md, K = model.assemble(terms, JetAlgebra(space))
+    M = np.array(M)
+    for j in range(model.ny):
+        if j in design_idx:
+            var = len(joint_idx) + design_idx.index(j)
+            M = M + jets.mul(space, jets.variable(space, var, y0[j]), Md[j])
+        else:
+            M = M + y0[j] * Md[j]
+    return space, M, np.array(K), joint_idx, design_idx
+
+
+@dataclass(frozen=True)
+class TaylorModel:
+    """Taylor polynomials of eigenvalues around ``(q0, y0)`` (paper 000 eq. 4 and 7–9).
+
+    Attributes:
+        space: Jet space (variables: expanded joints, then expanded design variables).
+        q0: Expansion pose, user coordinates, (nv,).
+        y0: Expansion design values [kg], (ny,).
+        modes: Non-rigid mode numbers (1 = lowest), (k,).
+        joint_idx: User indices of the expanded joints.
+        design_idx: Indices of the expanded design variables.
+        eigval_jets: Jets of λ_i = ω_i² [rad²/s²], (ncoef, k).
+        radius: Estimated convergence radius along each variable axis, (nvars, k), in the
+            variables' own units [rad, m or kg].
+    """
+
+    space: JetSpace
+    q0: np.ndarray
+    y0: np.ndarray
+    modes: tuple[int, ...]
+    joint_idx: tuple[int, ...]
+    design_idx: tuple[int, ...]
+    eigval_jets: np.ndarray
+    radius: np.ndarray
+
+    @property
+    def order(self) -> int:
+        """Truncation order p."""
+        return self.space.order
+
+    def jet(self, quantity: str = "eigval") -> np.ndarray:
+        """Coefficients of λ (``eigval``, [rad²/s²]) or of the frequency (``freq_hz``, [Hz])."""
+        if quantity == "eigval":
+            return self.eigval_jets
+        if quantity == "freq_hz":
+            return jets.sqrt(self.space, self.eigval_jets) / (2.0 * np.pi)
+        raise ConfigurationError(f"quantity='{quantity}': expected 'eigval' or 'freq_hz'")
+
+    def offsets(self, Q, Y=None, *, warn: bool = True) -> np.ndarray:
+        """Offsets (n, nvars) of samples from the expansion point; checks fixed joints."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        if Q.shape[1] != self.q0.size:
+            raise ConfigurationError(
+                f"expected {self.q0.size} joint values per sample, got shape {Q.shape}"
+            )
+        fixed = [i for i in range(self.q0.size) if i not in self.joint_idx]
+        if fixed and np.any(np.abs(Q[:, fixed] - self.q0[fixed]) > 1e-12):
+            raise ConfigurationError(
+                f"joints {fixed} are not expanded in this Taylor model; keep them at q0 "
+                f"({self.q0[fixed].tolist()}) or expand them"
+            )
+        dq = Q[:, list(self.joint_idx)] - self.q0[list(self.joint_idx)]
+        if Y is None:
+            dy = np.zeros((Q.shape[0], len(self.design_idx)))
+        else:
+            Y = np.atleast_2d(np.asarray(Y, dtype=float))
+            Y = np.broadcast_to(Y, (Q.shape[0], self.y0.size))
+            dy = Y[:, list(self.design_idx)] - self.y0[list(self.design_idx)]
+        dx = np.hstack([dq, dy])
+        if warn:
+            self.check_radius(dx)
+        return dx
+
+    def check_radius(self, dx: np.ndarray, fraction: float = 1.0) -> float:
+        """Warn when samples lie beyond ``fraction`` of the estimated convergence radius.
+
+        Returns:
+            The largest ratio ``distance / radius`` over samples, directions and modes.
+        """
+        r = np.min(self.radius, axis=1)  # per variable, the most restrictive mode
+        with np.errstate(divide="ignore"):
+            ratio = float(np.max(np.sum(np.abs(dx) / r[None, :], axis=1), initial=0.0))
+        if ratio > fraction:
+            warnings.warn(
+                f"Taylor model evaluated at {ratio:.2f}x its estimated convergence radius "
+                f"(radii per variable: {np.round(r, 4).tolist()}); the polynomial may diverge "
+                "there: expand closer or use TrajectoryExpansion",
+                TaylorRadiusWarning,
+                stacklevel=3,
+            )
+        return ratio
+
+    def evaluate(self, Q, Y=None, *, quantity: str = "eigval", linear_in_design=False,
+                 warn: bool = True) -> np.ndarray:
+        """Polynomial values at samples: (n, k) eigenvalues [rad²/s²] or frequencies [Hz].
+
+        Args:
+            Q: Joint values (n, nv) in user coordinates.
+            Y: Design values (n, ny) or (ny,) [kg] (default y0).
+            quantity: 'eigval' or 'freq_hz'.
+            linear_in_design: Use the partially linear polynomial λ̂ (eq. 7) instead of λ^p.
+            warn: Warn beyond the estimated convergence radius.
+        """
+        jet = self.jet(quantity)
+        if linear_in_design:
+            jet = jets.partially_linear(self.space, jet, self._design_vars)
+        return jets.evaluate(self.space, jet, self.offsets(Q, Y, warn=warn))
+
+    @property
+    def _design_vars(self) -> list[int]:
+        n = len(self.joint_idx)
+        return list(range(n, n + len(self.design_idx)))
+
+    def linear_parts(self, Q, *, quantity: str = "eigval"):
+        """Values of l_{i,0}(q) and l_{i,j}(q) of eq. (9) at samples.
+
+        Returns:
+            ``(l0, L)``: l0 (n, k) and L (n, k, ny_expanded), so that
+            ``λ̂_i = l0[:, i] + L[:, i, :] @ δy``.
+        """
+        if not self.design_idx:
+            raise ConfigurationError("the Taylor model expands no design variable")
+        if not self.joint_idx:
+            jet = self.jet(quantity)
+            l0 = np.repeat(jet[:1], np.atleast_2d(Q).shape[0], axis=0)
+            grads = jet[1 : 1 + len(self.design_idx)]
+            return l0, np.repeat(grads.T[None], l0.shape[0], axis=0)
+        qspace, l0, l1 = jets.design_split(self.space, self.jet(quantity), self._design_vars)
+        dq = self.offsets(Q, None)[:, : len(self.joint_idx)]
+        mon = jets.monomials(qspace, dq)
+        return mon @ l0, np.einsum("nc,jck->nkj", mon, l1)
+
+
+def root_test_radius(space: JetSpace, jet: np.ndarray, noise_rtol: float = 1e-13) -> np.ndarray:
+    """Convergence radius along each variable axis by the root test (Cauchy–Hadamard).
+
+    Along axis ``k`` the univariate coefficients ``c_j`` give ``R_j = |c_j / c_0|^{-1/j}``;
+    the estimate is the smallest ``R_j`` over the upper half of the orders (``j ≥ ⌈p/2⌉``),
+    a finite-order stand-in for ``1 / limsup |c_j|^{1/j}``. Coefficients below
+    ``noise_rtol · |c_0|`` count as zero; an axis with none left gets ``inf`` (a polynomial).
+    Measured on benchmark A, the estimate tightens with the order (about 1.4 rad at p = 4,
+    1.1 rad at p = 8 and 12 along the elbow angle, where the series visibly diverges beyond
+    about 1 rad), so it is a guide, not a bound.
+
+    Returns:
+        Radii (nvars, *shape) in the variables' units.
+    """
+    p = space.order
+    c = jets.ray_coefficients(space, jet, np.eye(space.nvars))  # (nvars, p+1, *shape)
+    c0 = np.abs(c[:, :1])
+    out = np.full((space.nvars,) + jet.shape[1:], np.inf)
+    if p < 1:
+        return out
+    lo = max(1, (p + 1) // 2)
+    for j in range(lo, p + 1):
+        ratio = np.abs(c[:, j]) / np.where(c0[:, 0] > 0, c0[:, 0], 1.0)
+        with np.errstate(divide="ignore"):
+            rj = np.where(ratio > noise_rtol, ratio ** (-1.0 / j), np.inf)
+        out = np.minimum(out, rj)
+    return out
+
+
+def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence[int] = (1,),
+           joints: Sequence[str] | None = None, design: Sequence[str] | None = None
+           ) -> TaylorModel:
+    """Build the Taylor model of the given non-rigid modes at ``(q0, y0)``.
+
+    Raises:
+        RepeatedEigenvalue: a requested mode is (nearly) repeated at the expansion point.
+    """
+    modes = tuple(int(m) for m in np.atleast_1d(modes))
+    if min(modes) < 1 or max(modes) > model.nx:
+        raise ConfigurationError(f"modes {modes} must lie in 1..{model.nx}")
+    space, M, K, jidx, didx = matrix_jets(model, q0, y0, order=order, joints=joints,
+                                          design=design)
+    idx = [model.nv + m - 1 for m in modes]
+    lam, _ = eigen_jets(space, M, K, idx)
+    radius = root_test_radius(space, lam)
+    return TaylorModel(
+        space=space,
+        q0=np.asarray(q0, dtype=float),
+        y0=model.check_y(y0),
+        modes=modes,
+        joint_idx=tuple(jidx),
+        design_idx=tuple(didx),
+        eigval_jets=lam,
+        radius=np.atleast_2d(radius),
+    )
