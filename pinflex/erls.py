@@ -459,7 +459,7 @@ class FlexibleModel:
         return q
 
     def check_y(self, y, *, bounds: bool = True) -> np.ndarray:
-        """Validate design values (ny,); ``None`` gives the nominal values."""
+        """Validate design values (ny,) or per-pose (n, ny); ``None`` gives the nominal ones."""
         if y is None:
             return self.y0
         if isinstance(y, dict):
@@ -468,15 +468,18 @@ class FlexibleModel:
                 raise DesignVariableNotFound(sorted(unknown)[0], self.design_names)
             y = [y.get(d.name, d.nominal) for d in self.design]
         y = np.asarray(y, dtype=float)
-        if y.shape != (self.ny,):
+        if y.shape[-1:] != (self.ny,) or y.ndim not in (1, 2):
             raise ConfigurationError(
                 f"expected {self.ny} design values ({', '.join(self.design_names)}), "
                 f"got shape {y.shape}"
             )
+        if not np.all(np.isfinite(y)):
+            raise ConfigurationError("design values must be finite")
         if bounds:
-            for d, v in zip(self.design, y):
-                if not d.lower - 1e-12 <= v <= d.upper + 1e-12:
-                    raise DesignVariableOutOfBounds(d.name, float(v), d.lower, d.upper)
+            for d, v in zip(self.design, np.atleast_2d(y).T):
+                bad = (v < d.lower - 1e-12) | (v > d.upper + 1e-12)
+                if np.any(bad):
+                    raise DesignVariableOutOfBounds(d.name, float(v[bad][0]), d.lower, d.upper)
         return y
 
     def joint_index(self, name: str) -> int:
@@ -617,8 +620,16 @@ class FlexibleModel:
         y = self.check_y(y, bounds=check_bounds)
         single = Q.ndim == 1
         Qb = Q[None] if single else Q
+        if y.ndim == 2 and y.shape[0] != Qb.shape[0]:
+            raise ConfigurationError(
+                f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
+            )
         M0, Md, K = self.assemble(self.pose_terms(Qb), BatchAlgebra(Qb.shape[0]))
-        M = M0 + np.tensordot(y, Md, axes=(0, 0)) if self.ny else M0
+        if self.ny:
+            M = M0 + (np.tensordot(y, Md, axes=(0, 0)) if y.ndim == 1
+                      else np.einsum("nj,jnab->nab", y, Md))
+        else:
+            M = M0
         return (M[0], K[0]) if single else (M, K)
 
     # ------------------------------------------------------------------ modal analysis
