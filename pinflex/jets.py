@@ -20,6 +20,8 @@ Conventions:
     Linear operations act coefficient by coefficient, so sums, scalings and products with a
     constant matrix are plain NumPy (``a + b``, ``2.0 * a``, ``C @ a``,
     ``a.swapaxes(-1, -2)``); only products of two jets need :func:`mul` or :func:`matmul`.
+    Add a constant through :func:`constant` (``a + constant(space, 2.0)``): a bare scalar
+    added to a jet would be added to every coefficient.
 """
 
 from __future__ import annotations
@@ -420,7 +422,8 @@ def sqrt(space: JetSpace, a: np.ndarray) -> np.ndarray:
         sel = inner & (space.pair_c >= sl.start) & (space.pair_c < sl.stop)
         acc = np.zeros((sl.stop - sl.start, *a.shape[1:]))
         if np.any(sel):
-            np.add.at(acc, space.pair_c[sel] - sl.start, s[space.pair_a[sel]] * s[space.pair_b[sel]])
+            terms = s[space.pair_a[sel]] * s[space.pair_b[sel]]
+            np.add.at(acc, space.pair_c[sel] - sl.start, terms)
         s[sl] = (a[sl] - acc) / (2.0 * s[0])
     return s
 

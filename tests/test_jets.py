@@ -27,7 +27,7 @@ def _sin_cos(space, x0):
 
 
 def test_multi_index_layout():
-    """Multi-indices are graded, descending-lexicographic within a degree, and indexed both ways."""
+    """Multi-indices are graded, descending-lexicographic within a degree, indexed both ways."""
     space = J.JetSpace(3, 4)
     mi = space.multi_indices
     assert space.ncoef == math.comb(3 + 4, 4) == mi.shape[0]
@@ -39,12 +39,13 @@ def test_multi_index_layout():
     for c, alpha in enumerate(mi.tolist()):
         assert space.index[tuple(alpha)] == c == space.position(alpha)
         assert space.factorials[c] == math.prod(math.factorial(a) for a in alpha)
-    assert J.JetSpace(2, 2).multi_indices.tolist() == [[0, 0], [1, 0], [0, 1], [2, 0], [1, 1], [0, 2]]
+    two = [[0, 0], [1, 0], [0, 1], [2, 0], [1, 1], [0, 2]]
+    assert J.JetSpace(2, 2).multi_indices.tolist() == two
     assert J.JetSpace(3, 4) == space and hash(J.JetSpace(3, 4)) == hash(space)
 
 
 def test_product_of_sines_matches_closed_form():
-    """sin(x+y)·cos(x) built from jet products equals ½[sin(2x+y) + sin(y)] coefficient by coefficient."""
+    """Jet products give sin(x+y)·cos(x) = ½[sin(2x+y) + sin(y)] coefficient by coefficient."""
     space = J.JetSpace(2, 7)
     x0, y0 = 0.37, -1.1
     (sx, cx), (sy, cy) = _sin_cos(space, (x0, y0))
@@ -111,7 +112,7 @@ def test_second_derivatives_match_complex_step_finite_difference():
 
 
 def test_evaluate_matches_direct_sum():
-    """evaluate and monomials agree with the sum Σ c_α δx^α written out term by term."""
+    """Evaluation and monomials agree with the sum Σ c_α δx^α written out term by term."""
     rng = np.random.default_rng(3)
     space = J.JetSpace(3, 4)
     jet = rng.standard_normal((space.ncoef, 2, 5))
@@ -188,7 +189,7 @@ def test_mul_broadcasts_scalar_jets_over_matrices():
 
 
 def test_sqrt_matches_binomial_series():
-    """sqrt of the jet of c + x1 + 2 x2 has the binomial-series coefficients of √(c + s)."""
+    """The square root of the jet of c + x1 + 2 x2 has the binomial coefficients of √(c + s)."""
     space = J.JetSpace(2, 6)
     c0 = 2.5
     f = J.constant(space, c0) + J.variable(space, 0) + 2 * J.variable(space, 1)
@@ -235,9 +236,8 @@ def test_design_split_reconstructs_partial_linearization():
     # Exactly linear in δy: the second difference along y vanishes.
     ey = np.zeros(4)
     ey[3] = 0.3
-    second = (
-        J.evaluate(space, lin, dx + ey) - 2 * J.evaluate(space, lin, dx) + J.evaluate(space, lin, dx - ey)
-    )
+    values = [J.evaluate(space, lin, dx + sign * ey) for sign in (1, 0, -1)]
+    second = values[0] - 2 * values[1] + values[2]
     np.testing.assert_allclose(second, 0.0, atol=1e-12)
     kept = J.partially_linear_mask(space, design)
     assert kept.sum() == q_space.ncoef + 2 * int(q_space.degree_offsets[4])

@@ -1,0 +1,404 @@
+r"""Taylor coefficients of eigenvalues and eigenvectors of a parametric eigenproblem.
+
+Implements the recursion of paper 000, eq. (5)–(6), generalised to any order ``p`` and any
+number of variables, for the symmetric generalized problem
+
+.. math:: K(x)\,\phi(x) = \lambda(x)\,M(x)\,\phi(x),
+
+given the jets (see :mod:`pinflex.jets`) of ``M`` (symmetric positive definite) and ``K``
+(symmetric positive semidefinite) at an expansion point ``x0``.
+
+The expanded quantity is the eigenvalue ``λ = ω²`` [rad²/s²] (not a frequency in Hz); use
+:func:`pinflex.jets.sqrt` for the jet of ``ω`` [rad/s] and divide by ``2π`` for Hz.
+
+Normalisation and sign:
+    Eigenvectors are **mass-normalised at every x**: ``φ(x)ᵀ M(x) φ(x) = 1``. In jet
+    coefficients this is ``Σ_{a+b+c=γ} φ_aᵀ M_b φ_c = δ_{γ0}``. The sign is fixed at the
+    expansion point only: the entry of ``φ(x0)`` with the largest magnitude (the first one on
+    ties) is positive, unless eigenvectors are supplied, whose signs are kept. Away from
+    ``x0`` the sign follows by continuity.
+
+Recursion:
+    Collecting the coefficient of ``δx^γ`` (``|γ| = d ≥ 1``) in ``Kφ = λMφ`` and in the
+    normalisation condition gives, with ``u = Mφ``,
+
+    .. math::
+
+        \begin{bmatrix} K_0 - \lambda_0 M_0 & -M_0\phi_0 \\ -\phi_0^T M_0 & 0
+        \end{bmatrix}
+        \begin{bmatrix} \phi_\gamma \\ \lambda_\gamma \end{bmatrix} =
+        \begin{bmatrix} -\sum_{a\neq 0} K_a\phi_{\gamma-a}
+            + \lambda_0 \hat u_\gamma + \sum_{a\neq 0,\gamma} \lambda_a u_{\gamma-a} \\
+            \tfrac12\big(\phi_0^T \hat u_\gamma
+            + \sum_{a\neq 0,\gamma} \phi_a^T u_{\gamma-a}\big) \end{bmatrix},
+        \qquad \hat u_\gamma = \sum_{a\neq 0} M_a \phi_{\gamma-a},
+
+    whose right-hand side only holds coefficients of degree < d. The bordered matrix is
+    square, symmetric and regular when ``λ0`` is a simple eigenvalue; it is LU-factorised once
+    per mode (its border scaled to the size of ``K0 − λ0 M0``) and reused for every
+    multi-index and order. Products of ``M_a, K_a`` with known ``φ_b`` are pushed forward
+    one GEMM per degree.
+
+Failure detection:
+    A mode whose eigenvalue belongs to a cluster of (nearly) equal eigenvalues has no
+    analytic eigenvector branch and the bordered matrix is singular: :func:`eigen_jets`
+    raises :class:`~pinflex.exceptions.RepeatedEigenvalue` instead of returning numbers. Two
+    eigenvalues are clustered when ``|λ_i − λ_j| ≤ rtol·max(|λ_i|, |λ_j|) + atol``; the
+    default ``atol`` is the eigensolver's noise level ``100·n·ε·max|λ|`` so that multiple rigid
+    (zero) eigenvalues form a cluster. A simple non-zero mode next to a multiple zero
+    eigenvalue is fine. The bordered matrix's reciprocal condition number is checked too.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from pinflex.exceptions import EigenSolverError, RepeatedEigenvalue
+from pinflex.jets import JetSpace, ray_coefficients
+
+__all__ = ["eigen_jets", "find_cluster", "radius_estimate"]
+
+_EPS = np.finfo(float).eps
+# LAPACK routines called directly: the scipy.linalg wrappers cost more than the work at n ≈ 20.
+_GETRF, _GETRS, _GECON = sla.get_lapack_funcs(("getrf", "getrs", "gecon"), dtype=np.float64)
+
+
+@lru_cache(maxsize=32)
+def _recursion_plan(space: JetSpace) -> tuple[list, list]:
+    """Per-degree pair sets of the recursion, cached per jet space.
+
+    Returns:
+        ``push[e]`` for ``e = 0..p-1``: ``(a_stop, b_slice, scatter)`` where every ``a`` in
+        ``1..a_stop-1`` (degrees 1..p-e) times every ``b`` of degree ``e`` is a valid pair,
+        laid out ``(a, b)`` row-major, and ``scatter`` (ncoef × npairs, sparse) sums them into
+        their target coefficients. ``inner[d]`` for ``d = 1..p`` (index ``d-1``):
+        ``(pa, pc, scatter)`` over pairs ``a + c = γ`` with ``|γ| = d``, ``a ≠ 0``, ``c ≠ 0``;
+        ``scatter`` (n_γ × npairs) sums them into the degree-``d`` coefficients.
+    """
+    p, off, mi = space.order, space.degree_offsets, space.multi_indices
+    push = []
+    for e in range(p):
+        a_stop = int(off[p - e + 1])
+        b0, b1 = int(off[e]), int(off[e + 1])
+        ai = np.repeat(np.arange(1, a_stop), b1 - b0)
+        bj = np.tile(np.arange(b0, b1), a_stop - 1)
+        tgt = [space.index[tuple(s)] for s in (mi[ai] + mi[bj]).tolist()]
+        scatter = sp.csr_matrix(
+            (np.ones(len(tgt)), (tgt, np.arange(len(tgt)))), shape=(space.ncoef, len(tgt))
+        )
+        push.append((a_stop, slice(b0, b1), scatter))
+    inner = []
+    for d in range(1, p + 1):
+        lo, hi = int(off[d]), int(off[d + 1])
+        sel = (space.pair_c >= lo) & (space.pair_c < hi) & (space.pair_a != 0)
+        sel &= space.pair_b != 0
+        pa, pc, tg = space.pair_a[sel], space.pair_b[sel], space.pair_c[sel] - lo
+        scatter = sp.csr_matrix(
+            (np.ones(tg.size), (tg, np.arange(tg.size))), shape=(hi - lo, tg.size)
+        )
+        inner.append((pa, pc, scatter))
+    return push, inner
+
+
+def find_cluster(
+    eigvals: np.ndarray, mode: int, *, rtol: float = 1e-6, atol: float | None = None
+) -> list[int]:
+    """Indices of the eigenvalues that are (nearly) equal to ``eigvals[mode]``.
+
+    Args:
+        eigvals: All eigenvalues ``λ`` [rad²/s²], ascending, shape ``(n,)``.
+        mode: Index of the mode of interest.
+        rtol: Relative tolerance.
+        atol: Absolute tolerance [rad²/s²]; default ``100·n·ε·max|λ|``.
+
+    Returns:
+        Sorted indices ``j`` with ``|λ_j − λ_mode| ≤ rtol·max(|λ_j|, |λ_mode|) + atol``,
+        including ``mode`` itself.
+    """
+    w = np.asarray(eigvals, dtype=float)
+    if atol is None:
+        atol = 100.0 * w.size * _EPS * float(np.max(np.abs(w)))
+    lam = w[mode]
+    close = np.abs(w - lam) <= rtol * np.maximum(np.abs(w), abs(lam)) + atol
+    return [int(j) for j in np.flatnonzero(close)]
+
+
+def _relative_gap(w: np.ndarray, mode: int) -> float:
+    """Smallest ``|λ_j − λ_i| / max(|λ_i|, |λ_j|)`` over the other modes (0 if both are 0)."""
+    others = np.delete(w, mode)
+    if others.size == 0:
+        return np.inf
+    diff = np.abs(others - w[mode])
+    scale = np.maximum(np.abs(others), abs(w[mode]))
+    rel = np.divide(diff, scale, out=np.zeros_like(diff), where=scale > 0)
+    return float(rel.min())
+
+
+def _check_pencil(space: JetSpace, M_jet: np.ndarray, K_jet: np.ndarray) -> int:
+    for name, jet in (("M_jet", M_jet), ("K_jet", K_jet)):
+        if jet.ndim != 3 or jet.shape[0] != space.ncoef or jet.shape[1] != jet.shape[2]:
+            raise ValueError(
+                f"{name} has shape {jet.shape}; expected ({space.ncoef}, n, n): a jet of square "
+                "matrices on this space"
+            )
+    if M_jet.shape != K_jet.shape:
+        raise ValueError(f"M_jet {M_jet.shape} and K_jet {K_jet.shape} differ in shape")
+    n = M_jet.shape[1]
+    for name, mat in (("M", M_jet[0]), ("K", K_jet[0])):
+        scale = max(float(np.max(np.abs(mat))), np.finfo(float).tiny)
+        if np.max(np.abs(mat - mat.T)) > 1e-10 * scale:
+            raise ValueError(f"{name}(x0) is not symmetric; the recursion needs symmetric M, K")
+    return n
+
+
+def _bordered_lu(
+    K0: np.ndarray, M0: np.ndarray, lam0: float, phi0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """LU of ``[[K0 − λ0 M0, −σ M0φ0], [−σ φ0ᵀM0, 0]]``; returns (lu, piv, σ, rcond)."""
+    n = K0.shape[0]
+    A = K0 - lam0 * M0
+    b = M0 @ phi0
+    sigma = max(float(np.max(np.abs(A))), np.finfo(float).tiny) / float(np.max(np.abs(b)))
+    B = np.empty((n + 1, n + 1))
+    B[:n, :n] = A
+    B[:n, n] = -sigma * b
+    B[n, :n] = -sigma * b
+    B[n, n] = 0.0
+    anorm = float(np.abs(B).sum(axis=0).max())
+    lu, piv, info = _GETRF(B, overwrite_a=True)
+    if info > 0:  # exactly singular pivot
+        return lu, piv, sigma, 0.0
+    rcond, _ = _GECON(lu, anorm, norm="1")
+    return lu, piv, sigma, float(rcond)
+
+
+def eigen_jets(
+    space: JetSpace,
+    M_jet: np.ndarray,
+    K_jet: np.ndarray,
+    modes: int | Sequence[int],
+    *,
+    eigvals0: np.ndarray | None = None,
+    eigvecs0: np.ndarray | None = None,
+    cluster_rtol: float = 1e-6,
+    cluster_atol: float | None = None,
+    cond_max: float = 1e13,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Jets of chosen eigenvalues and mass-normalised eigenvectors of ``K φ = λ M φ``.
+
+    Args:
+        space: Jet space of the expansion (``nvars`` variables, order ``p``).
+        M_jet: Jet of the mass matrix, shape ``(ncoef, n, n)``; ``M(x0)`` symmetric
+            positive definite.
+        K_jet: Jet of the stiffness matrix, shape ``(ncoef, n, n)``; ``K(x0)`` symmetric.
+        modes: Index or indices into the ascending eigenvalues of ``(K(x0), M(x0))``.
+        eigvals0: All eigenvalues at ``x0`` [rad²/s²], ascending, shape ``(n,)``; computed
+            with ``scipy.linalg.eigh`` when omitted. Give it together with ``eigvecs0``.
+        eigvecs0: Eigenvectors at ``x0``: shape ``(n, n)`` (all, columns in the order of
+            ``eigvals0``) or ``(n, len(modes))`` (the chosen modes). They are rescaled to
+            ``φᵀ M0 φ = 1``; their signs are kept.
+        cluster_rtol: Relative tolerance of :func:`find_cluster`.
+        cluster_atol: Absolute tolerance of :func:`find_cluster` [rad²/s²].
+        cond_max: Largest accepted 1-norm condition number of the (scaled) bordered matrix.
+
+    Returns:
+        ``(lam_jets, phi_jets)``: eigenvalue jets of shape ``(ncoef, nmodes)`` [rad²/s²] and
+        eigenvector jets of shape ``(ncoef, n, nmodes)``, in the coefficient order of
+        ``space`` (coefficients ``∂^α/α!``).
+
+    Raises:
+        RepeatedEigenvalue: A chosen mode is (nearly) repeated at ``x0``, or its bordered
+            matrix is too ill-conditioned.
+        EigenSolverError: ``M(x0)`` is not positive definite, or the supplied eigenpairs do
+            not solve the eigenproblem at ``x0``.
+        ValueError: Shapes or mode indices are wrong.
+    """
+    M_jet = np.asarray(M_jet, dtype=float)
+    K_jet = np.asarray(K_jet, dtype=float)
+    n = _check_pencil(space, M_jet, K_jet)
+    M0, K0 = M_jet[0], K_jet[0]
+    mode_list = [int(m) for m in np.atleast_1d(modes)]
+    if not mode_list or any(not 0 <= m < n for m in mode_list):
+        raise ValueError(f"modes = {mode_list}: give indices in 0..{n - 1}")
+    if (eigvals0 is None) != (eigvecs0 is None):
+        raise ValueError("give eigvals0 and eigvecs0 together, or neither")
+
+    if eigvals0 is None:
+        try:
+            w, V = sla.eigh(K0, M0, check_finite=False)
+        except np.linalg.LinAlgError as exc:
+            raise EigenSolverError(
+                "the generalized eigenproblem at the expansion point failed: M(x0) must be "
+                "symmetric positive definite"
+            ) from exc
+        phi0 = V[:, mode_list]
+        big = np.argmax(np.abs(phi0), axis=0)
+        phi0 = phi0 * np.sign(phi0[big, np.arange(len(mode_list))])
+    else:
+        w = np.asarray(eigvals0, dtype=float)
+        V = np.asarray(eigvecs0, dtype=float)
+        if w.shape != (n,) or np.any(np.diff(w) < 0):
+            raise ValueError(f"eigvals0 must be all {n} eigenvalues in ascending order")
+        if V.shape == (n, n):
+            phi0 = V[:, mode_list]
+        elif V.shape == (n, len(mode_list)):
+            phi0 = V
+        else:
+            raise ValueError(f"eigvecs0 has shape {V.shape}; expected ({n}, {n}) or ({n}, nmodes)")
+        phi0 = phi0 / np.sqrt(np.einsum("im,ij,jm->m", phi0, M0, phi0))
+    lam0 = w[mode_list]
+
+    # Detection: clusters first, then a residual check of supplied pairs.
+    for m in mode_list:
+        cluster = find_cluster(w, m, rtol=cluster_rtol, atol=cluster_atol)
+        if len(cluster) > 1:
+            raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m))
+    residual = K0 @ phi0 - (M0 @ phi0) * lam0
+    scale = np.abs(K0).max() * np.abs(phi0).max(axis=0) + np.abs(lam0) * np.abs(M0 @ phi0).max(
+        axis=0
+    )
+    if np.any(np.abs(residual).max(axis=0) > 1e-8 * np.maximum(scale, np.finfo(float).tiny)):
+        raise EigenSolverError(
+            "the eigenpairs at the expansion point do not satisfy K φ = λ M φ (relative "
+            "residual above 1e-8): pass eigvals0/eigvecs0 from scipy.linalg.eigh(K(x0), M(x0))"
+        )
+
+    factors = []
+    for j, m in enumerate(mode_list):
+        lu, piv, sigma, rcond = _bordered_lu(K0, M0, float(lam0[j]), phi0[:, j])
+        if not rcond * cond_max >= 1.0:
+            nearest = int(np.delete(np.arange(n), m)[np.argmin(np.abs(np.delete(w, m) - w[m]))])
+            cluster = sorted({m, nearest})
+            raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m))
+        factors.append((lu, piv, sigma))
+
+    return _recursion(space, M_jet, K_jet, lam0, phi0, factors)
+
+
+def _recursion(
+    space: JetSpace,
+    M_jet: np.ndarray,
+    K_jet: np.ndarray,
+    lam0: np.ndarray,
+    phi0: np.ndarray,
+    factors: list[tuple[np.ndarray, np.ndarray, float]],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Degree-by-degree solve of the bordered systems (see the module docstring)."""
+    ncoef, n = space.ncoef, M_jet.shape[1]
+    nm = phi0.shape[1]
+    p, off = space.order, space.degree_offsets
+    lam = np.zeros((ncoef, nm))
+    phi = np.zeros((ncoef, n, nm))
+    u = np.zeros((ncoef, n, nm))  # (Mφ)_γ; for unsolved γ only the a ≠ 0 part
+    v = np.zeros((ncoef, n, nm))  # (Kφ)_γ, a ≠ 0 part
+    lam[0], phi[0] = lam0, phi0
+    u[0] = M_jet[0] @ phi0
+    if p == 0:
+        return lam, phi
+    push, inner = _recursion_plan(space)
+    M0 = M_jet[0]
+    M_rows = M_jet.reshape(ncoef * n, n)  # views: the a ≠ 0 factors of a push are rows
+    K_rows = K_jet.reshape(ncoef * n, n)  # n .. a_stop·n
+
+    for d in range(p + 1):
+        if d >= 1:
+            lo, hi = int(off[d]), int(off[d + 1])
+            ng = hi - lo
+            pa, pc, scatter = inner[d - 1]
+            u_hat = u[lo:hi]
+            rhs = lam0 * u_hat - v[lo:hi]
+            s = (phi0 * u_hat).sum(axis=1)
+            if pa.size:
+                u_c = u[pc]
+                lam_u = lam[pa][:, None, :] * u_c
+                rhs += (scatter @ lam_u.reshape(pa.size, n * nm)).reshape(ng, n, nm)
+                s += scatter @ (phi[pa] * u_c).sum(axis=1)
+            s *= 0.5
+            for j, (lu, piv, sigma) in enumerate(factors):
+                block = np.empty((n + 1, ng))
+                block[:n] = rhs[:, :, j].T
+                block[n] = sigma * s[:, j]
+                sol, info = _GETRS(lu, piv, block, overwrite_b=True)
+                phi[lo:hi, :, j] = sol[:n].T
+                lam[lo:hi, j] = sigma * sol[n]
+            u[lo:hi] += np.matmul(M0, phi[lo:hi])
+        if d < p:
+            a_stop, bsl, scatter = push[d]
+            na, nb = a_stop - 1, bsl.stop - bsl.start
+            phis = phi[bsl].transpose(1, 0, 2).reshape(n, nb * nm)
+            for acc, rows in ((u, M_rows), (v, K_rows)):
+                prod = (rows[n : a_stop * n] @ phis).reshape(na, n, nb, nm)
+                prod = prod.transpose(0, 2, 1, 3).reshape(na * nb, n * nm)
+                acc += (scatter @ prod).reshape(ncoef, n, nm)
+    return lam, phi
+
+
+def radius_estimate(
+    space: JetSpace,
+    lam_jet: np.ndarray,
+    direction: np.ndarray | None = None,
+    *,
+    noise_rtol: float = 1e-12,
+) -> np.ndarray:
+    """Estimate the convergence radius of a jet along rays from its coefficient decay.
+
+    Along a ray ``t ↦ f(x0 + t v)`` the univariate coefficients are ``c_k``
+    (:func:`pinflex.jets.ray_coefficients`). Eigenvalue branches are limited by square-root
+    branch points (complex eigenvalue crossings), where ``|c_k| ≈ A k^{-3/2} R^{-k}|cos(kθ+ψ)|``
+    (the cosine from a complex-conjugate pair). The estimate is the Cauchy–Hadamard root test
+    made scale-free and robust to that oscillation: take ``v_k = log(|c_k| k^{3/2})`` for
+    ``k = 1..p`` (``c_0`` carries the offset of ``f`` and is left out), and the upper supporting
+    line of the points ``(k, v_k)`` above their mean abscissa ``k̄`` (the edge ``j ≤ k̄ < k`` of
+    their upper convex hull — a line lying above all points with the least total gap); its
+    slope is ``−log R``. Coefficients below ``noise_rtol · max_k |c_k|`` count as zero; a ray with
+    fewer than two non-zero orders (e.g. a polynomial of degree ≤ 1 along it) gets ``inf``.
+
+    This is a heuristic. It is scale-free in ``f`` and measures the radius in the parameter
+    ``t`` (the variables' own units). On ``λ = c ± √(1 + s²)`` from ``s0 ∈ {0, 0.5, 1.5}`` it
+    over-estimates by 1–15 % at ``p = 8`` and by 3–22 % at ``p = 4``; callers should keep a
+    safety factor (e.g. evaluate within half the estimate).
+
+    Args:
+        space: Jet space.
+        lam_jet: Jet of shape ``(ncoef, *shape)`` (e.g. ``lam_jets`` of :func:`eigen_jets`).
+        direction: Ray directions ``v``: ``None`` for every coordinate axis, shape
+            ``(nvars,)`` for one ray or ``(ndir, nvars)``.
+        noise_rtol: Relative threshold under which a coefficient counts as zero.
+
+    Returns:
+        Radius estimates in units of ``t``: shape ``(nvars, *shape)`` for ``direction=None``,
+        ``shape`` for a single direction, ``(ndir, *shape)`` otherwise.
+    """
+    lam_jet = np.asarray(lam_jet, dtype=float)
+    single = direction is not None and np.ndim(direction) == 1
+    dirs = np.eye(space.nvars) if direction is None else np.atleast_2d(direction)
+    coeffs = np.abs(ray_coefficients(space, lam_jet, dirs))  # (ndir, p+1, *shape)
+    lead = coeffs.shape[:1] + coeffs.shape[2:]
+    p = space.order
+    if p < 2:
+        return np.full(lead, np.inf)[0] if single else np.full(lead, np.inf)
+    c = np.moveaxis(coeffs, 1, -1).reshape(-1, p + 1)[:, 1:]  # (nray, p): k = 1..p
+    k = np.arange(1, p + 1, dtype=float)
+    valid = c > noise_rtol * np.max(c, axis=1, initial=0.0)[:, None]
+    with np.errstate(divide="ignore"):
+        v = np.where(valid, np.log(np.where(valid, c, 1.0)) + 1.5 * np.log(k), -np.inf)
+    count = valid.sum(axis=1)
+    kbar = (valid * k).sum(axis=1) / np.maximum(count, 1)
+    j_idx, k_idx = np.triu_indices(p, 1)
+    vj, vk = v[:, j_idx], v[:, k_idx]  # (nray, npair)
+    with np.errstate(invalid="ignore"):
+        slope = (vk - vj) / (k_idx - j_idx)
+        line = vj[:, :, None] + slope[:, :, None] * (k[None, None, :] - k[j_idx][None, :, None])
+        tol = 1e-9 * np.maximum(1.0, np.abs(line))
+        below = np.all(~valid[:, None, :] | (v[:, None, :] <= line + tol), axis=2)
+    spans = (k[j_idx][None] <= kbar[:, None]) & (k[k_idx][None] > kbar[:, None])
+    ok = valid[:, j_idx] & valid[:, k_idx] & below & spans
+    radius = np.where(ok, np.exp(-np.where(ok, slope, 0.0)), np.inf).min(axis=1)
+    radius = np.where(count >= 2, radius, np.inf)
+    radius = radius.reshape(coeffs.shape[0], *coeffs.shape[2:])
+    return radius[0] if single else radius
