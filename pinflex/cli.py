@@ -88,12 +88,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _optional_commands(sub) -> None:
-    for module in ("pinflex.taylor_cli", "pinflex.assign_cli", "pinflex.prbdm.cli"):
-        try:
-            mod = __import__(module, fromlist=["add_parser"])
-        except ImportError:
-            continue
-        mod.add_parser(sub)
+    import importlib
+    import importlib.util
+
+    from pinflex import assign_cli
+
+    assign_cli.add_parser(sub)
+    # the PRBDM command registers itself when its module is present
+    if importlib.util.find_spec("pinflex.prbdm.cli") is not None:
+        importlib.import_module("pinflex.prbdm.cli").add_parser(sub)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

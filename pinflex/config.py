@@ -1,0 +1,181 @@
+"""Assignment studies described in a TOML file.
+
+Example (paths are relative to the file; ``builtin:`` names a file shipped in ``urdf/``)::
+
+    robot = "builtin:two_link.urdf"
+    planar = true
+
+    [trajectory]
+    builtin = "benchmark_a"        # or: csv = "traj.csv" (columns t, then joints, in the
+                                   # model's user coordinates)
+
+    [expansion]
+    q0 = [1.817, 5.312]            # default: the middle sample
+    y0 = { m1 = 0.125, m2 = 0.125 }
+    order = 4
+    quantity = "freq_hz"           # or "eigval"
+
+    [[targets]]
+    mode = 1
+    freq_hz = 190.0
+    weight = 1.0
+
+    [constraints]
+    mass_budget_kg = 0.3
+    floors = [{ mode = 2, freq_hz = 400.0 }]
+    bands = [{ mode = 3, low_hz = 650.0, high_hz = 700.0 }]
+
+    [options]
+    baseline = { m1 = 0.0, m2 = 0.0 }   # the "before" design (default: lower bounds)
+    refine = false
+    report_modes = [2, 3, 4]
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pinflex.assignment import Target
+from pinflex.erls import FlexibleModel
+from pinflex.exceptions import ConfigurationError
+from pinflex.trajectory import Trajectory, benchmark_a_trajectory
+
+URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
+
+
+def builtin_path(name: str) -> Path:
+    """Path of a description shipped in the repository's ``urdf/`` folder."""
+    path = URDF_DIR / name
+    if not path.is_file():
+        available = sorted(p.name for p in URDF_DIR.glob("*")) if URDF_DIR.is_dir() else []
+        raise ConfigurationError(
+            f"no built-in description '{name}'; available: {', '.join(available) or '(none)'} "
+            "(built-in files need an editable install: pip install -e .)"
+        )
+    return path
+
+
+def resolve(value: str, folder: Path) -> Path:
+    """Resolve a path from a config file (``builtin:NAME`` or relative to the file)."""
+    if value.startswith("builtin:"):
+        return builtin_path(value[len("builtin:"):])
+    path = Path(value)
+    return path if path.is_absolute() else (folder / path)
+
+
+def user_trajectory(model: FlexibleModel, builtin: str) -> Trajectory:
+    """A built-in trajectory converted to the model's user coordinates."""
+    if builtin != "benchmark_a":
+        raise ConfigurationError(f"unknown built-in trajectory '{builtin}'; use 'benchmark_a'")
+    tr = benchmark_a_trajectory()  # Pinocchio's (relative) joint values
+    if model.nv != tr.q.shape[1]:
+        raise ConfigurationError(
+            f"the benchmark_a trajectory has 2 joints; the robot has {model.nv}"
+        )
+    q_user = np.linalg.solve(model.coord_map, tr.q.T).T
+    return Trajectory(tr.times_s, q_user, model.joint_names, name="benchmark_a")
+
+
+@dataclass
+class AssignmentConfig:
+    """A parsed assignment study (see the module docstring for the file format)."""
+
+    robot: Path
+    planar: bool
+    trajectory: dict
+    targets: list[Target]
+    q0: np.ndarray | None = None
+    y0: dict | None = None
+    order: int = 4
+    quantity: str = "freq_hz"
+    mass_budget_kg: float | None = None
+    floors: list[tuple[int, float]] = field(default_factory=list)
+    bands: list[tuple[int, float, float]] = field(default_factory=list)
+    baseline: dict | None = None
+    refine: bool = False
+    report_modes: list[int] = field(default_factory=lambda: [2, 3, 4])
+    folder: Path = Path(".")
+
+    def build_model(self) -> FlexibleModel:
+        """The flexible model of the study."""
+        return FlexibleModel(self.robot, planar=self.planar)
+
+    def build_trajectory(self, model: FlexibleModel) -> Trajectory:
+        """The study's trajectory in the model's user coordinates."""
+        if "builtin" in self.trajectory:
+            return user_trajectory(model, self.trajectory["builtin"])
+        if "csv" in self.trajectory:
+            return Trajectory.from_csv(resolve(self.trajectory["csv"], self.folder))
+        raise ConfigurationError("[trajectory] needs builtin = \"...\" or csv = \"...\"")
+
+
+def load_config(path: str | Path) -> AssignmentConfig:
+    """Read an assignment study from a TOML file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigurationError(f"config file '{path}' does not exist")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigurationError(f"'{path}' is not valid TOML: {exc}") from exc
+    folder = path.parent
+    if "robot" not in data:
+        raise ConfigurationError(f"'{path}': the key robot = \"...\" is missing")
+    targets = []
+    for t in data.get("targets", []):
+        if "mode" not in t or "freq_hz" not in t:
+            raise ConfigurationError("each [[targets]] entry needs mode and freq_hz")
+        targets.append(Target(int(t["mode"]), t["freq_hz"], float(t.get("weight", 1.0))))
+    if not targets:
+        raise ConfigurationError(f"'{path}': give at least one [[targets]] entry")
+    exp = data.get("expansion", {})
+    cons = data.get("constraints", {})
+    opts = data.get("options", {})
+    known = {"robot", "planar", "trajectory", "expansion", "targets", "constraints", "options"}
+    unknown = set(data) - known
+    if unknown:
+        raise ConfigurationError(f"'{path}': unknown keys {sorted(unknown)}; known: {sorted(known)}")
+    return AssignmentConfig(
+        robot=resolve(data["robot"], folder),
+        planar=bool(data.get("planar", False)),
+        trajectory=data.get("trajectory", {"builtin": "benchmark_a"}),
+        targets=targets,
+        q0=np.array(exp["q0"], dtype=float) if "q0" in exp else None,
+        y0=exp.get("y0"),
+        order=int(exp.get("order", 4)),
+        quantity=str(exp.get("quantity", "freq_hz")),
+        mass_budget_kg=cons.get("mass_budget_kg"),
+        floors=[(int(f["mode"]), float(f["freq_hz"])) for f in cons.get("floors", [])],
+        bands=[(int(b["mode"]), float(b["low_hz"]), float(b["high_hz"]))
+               for b in cons.get("bands", [])],
+        baseline=opts.get("baseline"),
+        refine=bool(opts.get("refine", False)),
+        report_modes=[int(m) for m in opts.get("report_modes", [2, 3, 4])],
+        folder=folder,
+    )
+
+
+def run_config(cfg: AssignmentConfig):
+    """Build the model and trajectory of a study and solve it.
+
+    Returns:
+        ``(model, trajectory, result)``.
+    """
+    from pinflex.assignment import assign_frequencies
+
+    model = cfg.build_model()
+    traj = cfg.build_trajectory(model)
+    baseline = model.check_y(cfg.baseline) if cfg.baseline is not None else None
+    result = assign_frequencies(
+        model, traj, cfg.targets,
+        y_before=baseline, refine=cfg.refine,
+        report_modes=[m for m in cfg.report_modes if m <= model.nx],
+        q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
+        order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,
+        floors=cfg.floors, bands=cfg.bands,
+    )
+    return model, traj, result
