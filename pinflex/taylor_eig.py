@@ -57,6 +57,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+from scipy.linalg import lapack
 
 from pinflex.exceptions import EigenSolverError, RepeatedEigenvalue
 from pinflex.jets import JetSpace, ray_coefficients
@@ -65,7 +66,7 @@ __all__ = ["eigen_jets", "find_cluster", "radius_estimate"]
 
 _EPS = np.finfo(float).eps
 # LAPACK routines called directly: the scipy.linalg wrappers cost more than the work at n ≈ 20.
-_GETRF, _GETRS, _GECON = sla.get_lapack_funcs(("getrf", "getrs", "gecon"), dtype=np.float64)
+_GETRF, _GETRS, _GECON = lapack.dgetrf, lapack.dgetrs, lapack.dgecon
 
 
 @lru_cache(maxsize=32)
@@ -122,19 +123,24 @@ def find_cluster(
     """
     w = np.asarray(eigvals, dtype=float)
     if atol is None:
-        atol = 100.0 * w.size * _EPS * float(np.max(np.abs(w)))
+        atol = _default_atol(w)
     lam = w[mode]
     close = np.abs(w - lam) <= rtol * np.maximum(np.abs(w), abs(lam)) + atol
     return [int(j) for j in np.flatnonzero(close)]
 
 
-def _relative_gap(w: np.ndarray, mode: int) -> float:
-    """Smallest ``|λ_j − λ_i| / max(|λ_i|, |λ_j|)`` over the other modes (0 if both are 0)."""
+def _default_atol(eigvals: np.ndarray) -> float:
+    """Eigensolver noise level ``100·n·ε·max|λ|`` [rad²/s²]."""
+    return 100.0 * eigvals.size * _EPS * float(np.max(np.abs(eigvals)))
+
+
+def _relative_gap(w: np.ndarray, mode: int, atol: float) -> float:
+    """Smallest ``|λ_j − λ_i| / max(|λ_i|, |λ_j|, atol)`` over the other modes."""
     others = np.delete(w, mode)
     if others.size == 0:
         return np.inf
     diff = np.abs(others - w[mode])
-    scale = np.maximum(np.abs(others), abs(w[mode]))
+    scale = np.maximum(np.maximum(np.abs(others), abs(w[mode])), atol)
     rel = np.divide(diff, scale, out=np.zeros_like(diff), where=scale > 0)
     return float(rel.min())
 
@@ -254,10 +260,11 @@ def eigen_jets(
     lam0 = w[mode_list]
 
     # Detection: clusters first, then a residual check of supplied pairs.
+    atol = _default_atol(w) if cluster_atol is None else float(cluster_atol)
     for m in mode_list:
-        cluster = find_cluster(w, m, rtol=cluster_rtol, atol=cluster_atol)
+        cluster = find_cluster(w, m, rtol=cluster_rtol, atol=atol)
         if len(cluster) > 1:
-            raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m))
+            raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m, atol))
     residual = K0 @ phi0 - (M0 @ phi0) * lam0
     scale = np.abs(K0).max() * np.abs(phi0).max(axis=0) + np.abs(lam0) * np.abs(M0 @ phi0).max(
         axis=0
@@ -274,7 +281,7 @@ def eigen_jets(
         if not rcond * cond_max >= 1.0:
             nearest = int(np.delete(np.arange(n), m)[np.argmin(np.abs(np.delete(w, m) - w[m]))])
             cluster = sorted({m, nearest})
-            raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m))
+            raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m, atol))
         factors.append((lu, piv, sigma))
 
     return _recursion(space, M_jet, K_jet, lam0, phi0, factors)
