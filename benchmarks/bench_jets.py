@@ -40,7 +40,7 @@ def best_of(fn, repeat=7, number=1):
 def synthetic_pencil(space, rng):
     """Jets of a symmetric M (positive definite at x0) and K (two rigid modes at x0)."""
     n, ne = N_DOF, N_DOF - N_RIGID
-    decay = 0.3 ** space.degrees
+    decay = 0.3**space.degrees
     a = rng.standard_normal((space.ncoef, n, n)) * decay[:, None, None] / n
     b = rng.standard_normal((space.ncoef, ne, ne)) * decay[:, None, None]
     M = a + a.transpose(0, 2, 1)
