@@ -360,3 +360,108 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         eigval_jets=lam,
         radius=np.atleast_2d(radius),
     )
+
+
+@dataclass(frozen=True)
+class TrajectoryExpansion:
+    """Several Taylor models covering a trajectory, each on a run of consecutive samples.
+
+    Attributes:
+        models: The Taylor models (joints expanded, design fixed).
+        segments: Sample ranges ``(start, stop)`` (stop exclusive) covered by each model.
+        order: Their common order p.
+        tol: Relative tolerance they were chosen for.
+        max_error: Largest relative error over all samples, checked with the exact model.
+        candidates: ``{order: number of expansion points}`` for every order tried.
+    """
+
+    models: tuple[TaylorModel, ...]
+    segments: tuple[tuple[int, int], ...]
+    order: int
+    tol: float
+    max_error: float
+    candidates: dict[int, int]
+
+    def evaluate(self, Q, *, quantity: str = "freq_hz") -> np.ndarray:
+        """Values at the trajectory's own samples Q (ns, nv), each from its segment's model."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        out = None
+        for tm, (a, b) in zip(self.models, self.segments):
+            v = tm.evaluate(Q[a:b], quantity=quantity, warn=False)
+            if out is None:
+                out = np.empty((Q.shape[0],) + v.shape[1:])
+            out[a:b] = v
+        return out
+
+
+def _cover(model, Q, y, exact, tol, order, modes, joints, quantity, step):
+    """Greedy cover of the samples by expansions of one order; returns models and segments."""
+    ns = Q.shape[0]
+    models, segments = [], []
+    s = 0
+    while s < ns:
+        best = None
+        c = s
+        while c < ns:
+            tm = expand(model, Q[c], y, order=order, modes=modes, joints=joints, design=[])
+            approx = tm.evaluate(Q, quantity=quantity, warn=False)
+            ok = np.all(np.abs(approx / exact - 1) <= tol, axis=1)
+            a = c
+            while a > s and ok[a - 1]:
+                a -= 1
+            if a > s:  # this centre no longer reaches back to s
+                break
+            b = c
+            while b < ns and ok[b]:
+                b += 1
+            if best is None or b > best[2]:
+                best = (tm, s, b)
+            if b >= ns:
+                break
+            c += step
+        tm, a, b = best
+        models.append(tm)
+        segments.append((a, b))
+        s = b
+    return models, segments
+
+
+def expand_along(model: FlexibleModel, Q, y=None, *, tol: float = 1e-3, modes=(1,),
+                 orders: Sequence[int] = tuple(range(1, 9)), joints=None,
+                 quantity: str = "freq_hz", step: int | None = None) -> TrajectoryExpansion:
+    """Cover a trajectory with the fewest Taylor expansions, then the lowest order, within tol.
+
+    For each order p the samples are covered greedily from the start: among expansion points
+    tried every ``step`` samples ahead, the one whose validity run (relative error ≤ ``tol``
+    against the exact model, for every requested mode) reaches back to the first uncovered
+    sample and furthest forward is kept. The answer is the order with the fewest expansion
+    points, the lowest order on ties: no more model than the trajectory needs.
+
+    Args:
+        model: The flexible model.
+        Q: Trajectory samples (ns, nv), user coordinates.
+        y: Design values [kg] (fixed; default nominal).
+        tol: Relative tolerance on the expanded quantity.
+        modes: Non-rigid modes to cover.
+        orders: Orders to try.
+        joints: Joints to expand (default all).
+        quantity: 'freq_hz' or 'eigval'.
+        step: Spacing of candidate expansion points in samples (default ns // 38 + 1).
+    """
+    Q = model.check_q(Q)
+    y = model.check_y(y)
+    modes = tuple(int(m) for m in np.atleast_1d(modes))
+    f = model.frequencies(Q, y, n_modes=max(modes))[:, [m - 1 for m in modes]]
+    exact = f if quantity == "freq_hz" else (2 * np.pi * f) ** 2
+    step = step or (Q.shape[0] // 38 + 1)
+    best = None
+    candidates = {}
+    for p in orders:
+        models, segments = _cover(model, Q, y, exact, tol, p, modes, joints, quantity, step)
+        candidates[int(p)] = len(models)
+        if best is None or len(models) < len(best[1]):
+            best = (p, models, segments)
+    p, models, segments = best
+    result = TrajectoryExpansion(tuple(models), tuple(segments), int(p), tol, 0.0, candidates)
+    err = float(np.max(np.abs(result.evaluate(Q, quantity=quantity) / exact - 1)))
+    return TrajectoryExpansion(tuple(models), tuple(segments), int(p), tol, err, candidates)

@@ -187,3 +187,21 @@ def test_frequency_polynomial_is_the_square_root_of_the_eigenvalue_one():
     lam = tm.evaluate(q[None])[0, 0]
     assert f == pytest.approx(np.sqrt(lam) / (2 * np.pi), rel=1e-11)
     assert pin is not None
+
+
+def test_expansion_along_a_trajectory_meets_the_tolerance_with_the_fewest_points():
+    """Covering benchmark A's path to 1e-4: every sample within tol, fewest points chosen."""
+    from pinflex.config import user_trajectory
+    from pinflex.parametric import expand_along
+
+    model = FlexibleModel(TWO_LINK, planar=True)
+    traj = user_trajectory(model, "benchmark_a")
+    cover = expand_along(model, traj.q, np.zeros(2), tol=1e-4, orders=(1, 2, 3, 4))
+    exact = model.frequencies(traj.q, np.zeros(2), n_modes=1)[:, 0]
+    approx = cover.evaluate(traj.q)[:, 0]
+    assert np.max(np.abs(approx / exact - 1)) <= 1e-4
+    assert len(cover.models) == min(cover.candidates.values())
+    assert cover.candidates[1] > cover.candidates[4]  # low orders need more points
+    # segments tile the samples without gaps
+    assert cover.segments[0][0] == 0 and cover.segments[-1][1] == 152
+    assert all(a[1] == b[0] for a, b in zip(cover.segments, cover.segments[1:]))
