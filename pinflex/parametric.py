@@ -191,6 +191,12 @@ class TaylorModel:
     design_idx: tuple[int, ...]
     eigval_jets: np.ndarray
     radius: np.ndarray
+    freq_jets: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.freq_jets is None:
+            f = jets.sqrt(self.space, self.eigval_jets) / (2.0 * np.pi)
+            object.__setattr__(self, "freq_jets", f)
 
     @property
     def order(self) -> int:
@@ -202,7 +208,7 @@ class TaylorModel:
         if quantity == "eigval":
             return self.eigval_jets
         if quantity == "freq_hz":
-            return jets.sqrt(self.space, self.eigval_jets) / (2.0 * np.pi)
+            return self.freq_jets
         raise ConfigurationError(f"quantity='{quantity}': expected 'eigval' or 'freq_hz'")
 
     def offsets(self, Q, Y=None, *, warn: bool = True) -> np.ndarray:
