@@ -515,7 +515,12 @@ def monomials(space: JetSpace, dx: np.ndarray) -> np.ndarray:
         raise ValueError(f"dx has shape {dx.shape}; expected (nsamples, {space.nvars})")
     # a table of powers δx_k^j, then one gather per variable (fewer, larger NumPy calls than
     # a degree-by-degree build; this runs once per evaluation of a Taylor model)
-    powers = dx2[:, :, None] ** np.arange(space.order + 1)[None, None, :]
+    n, nv = dx2.shape
+    powers = np.empty((n, nv, space.order + 1), dtype=np.result_type(dx2, float))
+    powers[:, :, 0] = 1.0
+    if space.order:
+        np.cumprod(np.broadcast_to(dx2[:, :, None], (n, nv, space.order)), axis=2,
+                   out=powers[:, :, 1:])
     mi = space.multi_indices
     mon = powers[:, 0, mi[:, 0]]
     for k in range(1, space.nvars):
