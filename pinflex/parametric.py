@@ -213,28 +213,40 @@ class TaylorModel:
 
     def offsets(self, Q, Y=None, *, warn: bool = True) -> np.ndarray:
         """Offsets (n, nvars) of samples from the expansion point; checks fixed joints."""
-        Q = np.atleast_2d(np.asarray(Q, dtype=float))
-        if Q.shape[1] != self.q0.size:
+        Q = np.asarray(Q, dtype=float)
+        if Q.ndim == 1:
+            Q = Q[None]
+        if Q.ndim != 2 or Q.shape[1] != self.q0.size:
             raise ConfigurationError(
                 f"expected {self.q0.size} joint values per sample, got shape {Q.shape}"
             )
-        fixed = [i for i in range(self.q0.size) if i not in self.joint_idx]
-        if fixed and np.any(np.abs(Q[:, fixed] - self.q0[fixed]) > 1e-12):
-            raise ConfigurationError(
-                f"joints {fixed} are not expanded in this Taylor model; keep them at q0 "
-                f"({self.q0[fixed].tolist()}) or expand them"
-            )
-        dq = Q[:, list(self.joint_idx)] - self.q0[list(self.joint_idx)]
-        if Y is None:
-            dy = np.zeros((Q.shape[0], len(self.design_idx)))
+        jidx = self._jidx
+        if len(jidx) < self.q0.size:
+            fixed = [i for i in range(self.q0.size) if i not in self.joint_idx]
+            if np.any(np.abs(Q[:, fixed] - self.q0[fixed]) > 1e-12):
+                raise ConfigurationError(
+                    f"joints {fixed} are not expanded in this Taylor model; keep them at q0 "
+                    f"({self.q0[fixed].tolist()}) or expand them"
+                )
+        if not self.design_idx:
+            dx = Q[:, jidx] - self.q0[jidx]
         else:
-            Y = np.atleast_2d(np.asarray(Y, dtype=float))
-            Y = np.broadcast_to(Y, (Q.shape[0], self.y0.size))
-            dy = Y[:, list(self.design_idx)] - self.y0[list(self.design_idx)]
-        dx = np.hstack([dq, dy])
+            dx = np.empty((Q.shape[0], self.space.nvars))
+            nj = len(jidx)
+            dx[:, :nj] = Q[:, jidx] - self.q0[jidx]
+            if Y is None:
+                dx[:, nj:] = 0.0
+            else:
+                Y = np.asarray(Y, dtype=float)
+                didx = list(self.design_idx)
+                dx[:, nj:] = Y[..., didx] - self.y0[didx]
         if warn:
             self.check_radius(dx)
         return dx
+
+    @property
+    def _jidx(self) -> np.ndarray:
+        return np.asarray(self.joint_idx, dtype=int)
 
     def check_radius(self, dx: np.ndarray, fraction: float = 1.0) -> float:
         """Warn when samples lie beyond ``fraction`` of the estimated convergence radius.
