@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex import jets
-from pinflex.erls import FlexibleModel, _PoseTerms
+from pinflex.erls import BatchAlgebra, FlexibleModel, _PoseTerms
 from pinflex.exceptions import ConfigurationError, TaylorRadiusWarning
 from pinflex.jets import JetSpace
 from pinflex.kinematics import axis_rotation, skew
@@ -154,16 +154,31 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     if order < 0:
         raise ConfigurationError(f"order = {order} must be >= 0")
     space = JetSpace(nvars, int(order))
-    joint_vars = {l: k for k, l in enumerate(joint_idx)}
-    terms = pose_jets(model, space, q0, joint_vars)
-    M, Md, K = model.assemble(terms, JetAlgebra(space))
-    M = np.array(M)
+    nj, nd = len(joint_idx), len(design_idx)
+    # The pose terms depend on the joints only: assemble in the joints' own (smaller) jet
+    # space, then embed. Design masses enter M linearly: δy_j shifts coefficients by e_j.
+    if nj:
+        qspace = JetSpace(nj, int(order))
+        terms = pose_jets(model, qspace, q0, {l: k for k, l in enumerate(joint_idx)})
+        Mq, Mdq, Kq = model.assemble(terms, JetAlgebra(qspace))
+        alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
+    else:
+        Mq, Mdq, Kq = model.assemble(model.pose_terms(q0[None]), BatchAlgebra(1))
+        alphas = [()]
+    zeros = (0,) * nd
+    emb = np.array([space.index[a + zeros] for a in alphas])
+    shape = (space.ncoef,) + Mq.shape[1:]
+    M, K = np.zeros(shape), np.zeros(shape)
+    M[emb] = Mq
+    K[emb] = Kq
     for j in range(model.ny):
+        M[emb] += y0[j] * Mdq[j]
         if j in design_idx:
-            var = len(joint_idx) + design_idx.index(j)
-            M = M + jets.mul(space, jets.variable(space, var, y0[j]), Md[j])
-        else:
-            M = M + y0[j] * Md[j]
+            k = design_idx.index(j)
+            unit = tuple(int(i == k) for i in range(nd))
+            low = [i for i, a in enumerate(alphas) if sum(a) < order]
+            shifted = np.array([space.index[alphas[i] + unit] for i in low], dtype=int)
+            M[shifted] += Mdq[j][low]
     return space, M, np.array(K), joint_idx, design_idx
 
 
