@@ -34,6 +34,21 @@ from pinflex.kinematics import axis_rotation, skew
 from pinflex.taylor_eig import eigen_jets
 
 
+def _monomials(space: JetSpace, dx: np.ndarray) -> np.ndarray:
+    """Monomials (n, ncoef) of offsets (n, nvars): powers by cumulative products, then gathers."""
+    n, nv = dx.shape
+    powers = np.empty((nv, space.order + 1, n))
+    powers[:, 0] = 1.0
+    if space.order:
+        np.cumprod(np.repeat(dx.T[:, None, :], space.order, axis=1), axis=1,
+                   out=powers[:, 1:])
+    mi = space.multi_indices
+    mon = powers[0, mi[:, 0]]
+    for k in range(1, nv):
+        mon *= powers[k, mi[:, k]]
+    return mon.T
+
+
 class JetAlgebra:
     """Taylor coefficients on the leading axis (see :class:`pinflex.erls.BatchAlgebra`)."""
 
@@ -235,7 +250,10 @@ class TaylorModel:
             raise ConfigurationError(
                 f"expected {self.q0.size} joint values per sample, got shape {Q.shape}"
             )
-        jidx = self._jidx
+        jidx = self.__dict__.get("_jidx_arr")
+        if jidx is None:
+            jidx = np.asarray(self.joint_idx, dtype=int)
+            self.__dict__["_jidx_arr"] = jidx
         if len(jidx) < self.q0.size:
             fixed = [i for i in range(self.q0.size) if i not in self.joint_idx]
             if np.any(np.abs(Q[:, fixed] - self.q0[fixed]) > 1e-12):
@@ -258,10 +276,6 @@ class TaylorModel:
         if warn:
             self.check_radius(dx)
         return dx
-
-    @property
-    def _jidx(self) -> np.ndarray:
-        return np.asarray(self.joint_idx, dtype=int)
 
     def check_radius(self, dx: np.ndarray, fraction: float = 1.0) -> float:
         """Warn when samples lie beyond ``fraction`` of the estimated convergence radius.
@@ -305,10 +319,20 @@ class TaylorModel:
             linear_in_design: Use the partially linear polynomial λ̂ (eq. 7) instead of λ^p.
             warn: Warn beyond the estimated convergence radius.
         """
-        jet = self.jet(quantity)
-        if linear_in_design:
-            jet = jets.partially_linear(self.space, jet, self._design_vars)
-        return jets.evaluate(self.space, jet, self.offsets(Q, Y, warn=warn))
+        coef = self._coefficients(quantity, bool(linear_in_design))
+        dx = self.offsets(Q, Y, warn=warn)
+        return _monomials(self.space, dx) @ coef
+
+    def _coefficients(self, quantity: str, linear: bool) -> np.ndarray:
+        """Coefficient matrix (ncoef, k) of a polynomial, cached."""
+        cache = self.__dict__.setdefault("_coef_cache", {})
+        key = (quantity, linear)
+        if key not in cache:
+            jet = self.jet(quantity)
+            if linear:
+                jet = jets.partially_linear(self.space, jet, self._design_vars)
+            cache[key] = np.ascontiguousarray(jet.reshape(self.space.ncoef, -1))
+        return cache[key]
 
     @property
     def _design_vars(self) -> list[int]:
