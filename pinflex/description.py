@@ -18,6 +18,9 @@ URDF parsers (Pinocchio's included) ignore them, so the file still loads unchang
 ``tip`` (beam end in the link frame [m]; default: the origin of the link's only child joint),
 ``normal`` (a vector in the link frame fixing the beam's z axis; default: the parent joint's
 axis if it is normal to the beam, else the link axis least aligned with the beam).
+The beam replaces the link's URDF inertial (its mass comes from the section and density);
+everything attached to the link (child joints, point masses) rides on the beam at its axial
+station, with a rigid offset from the axis.
 ``<pinflex:material>``: ``E`` [Pa] (required), ``G`` [Pa] (default ``E / (2 (1 + poisson))``,
 ``poisson`` default 0.3), and ``density`` [kg/m^3] or ``linear_density`` [kg/m].
 ``<pinflex:section>``: explicit ``A Iy Iz J`` [m^2, m^4], or ``shape`` = ``solid_circle``
