@@ -1,0 +1,305 @@
+"""A flexible robot drawn in meshcat: URDF visuals, deformed beams, joints and point masses.
+
+* URDF visual geometry is loaded by Pinocchio (``pin.buildGeomFromUrdfString``, meshes found
+  through ``package://`` URIs in the description's folder and in example-robot-data) and put
+  in the scene by Pinocchio's ``MeshcatVisualizer``. Visuals of rigid links move with their
+  link; visuals of flexible links stay at the undeformed pose as translucent ghosts, so that
+  the deformed beam drawn over them shows the deflection.
+* Every flexible link is a chain of cylinders through stations of its centreline
+  (:func:`pinflex.visualization.shapes.centrelines`).
+* Links without visual geometry get simple shapes: a sphere at the link origin and a cylinder
+  to each child joint. Moving joints get a sphere; point masses a sphere whose volume grows
+  with the mass (zero masses are not drawn).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from pinflex.erls import FlexibleModel, ModalResult
+from pinflex.exceptions import InvalidDescription, PinflexWarning
+from pinflex.visualization import shapes
+from pinflex.visualization.scene import (
+    BEAM_COLOUR,
+    GHOST_RGBA,
+    JOINT_COLOUR,
+    LINK_COLOUR,
+    MASS_COLOUR,
+    ROOT,
+    SceneWriter,
+    rgb_int,
+    segment_matrix,
+    translation,
+)
+
+#: Density used to size point-mass spheres [kg/m^3] (a display choice, not a material).
+MASS_SPHERE_DENSITY = 2000.0
+
+
+def load_visual_model(model: FlexibleModel) -> pin.GeometryModel | None:
+    """Visual geometry of the URDF, or ``None`` (with a warning) when it cannot be loaded."""
+    desc = model.description
+    dirs = [str(desc.base_dir)] if desc.base_dir is not None else []
+    try:
+        from pinflex.description import robot_data_dir
+
+        dirs.append(str(robot_data_dir().parent.parent))
+    except InvalidDescription:
+        pass
+    try:
+        return pin.buildGeomFromUrdfString(
+            model.model, desc.urdf_xml, pin.GeometryType.VISUAL, package_dirs=dirs
+        )
+    except (RuntimeError, ValueError) as exc:
+        warnings.warn(
+            f"the URDF's visual geometry could not be loaded ({exc}); drawing simple shapes",
+            PinflexWarning,
+            stacklevel=3,
+        )
+        return None
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """What moves in a frame: link placements and beam station positions.
+
+    Attributes:
+        links: World placement of every link frame.
+        beams: World positions of the drawing stations of every flexible link, (n_st, 3) [m].
+    """
+
+    links: dict[str, pin.SE3]
+    beams: dict[str, np.ndarray]
+
+
+class RobotDrawing:
+    """The meshcat objects of a flexible robot at a rest pose, and how to move them.
+
+    Args:
+        writer: Scene writer of the preview.
+        model: The flexible model.
+        q: Rest pose (user coordinates).
+        y: Design values [kg] (sizes of the point-mass spheres); default nominal.
+        stations_per_element: Drawing stations per beam element.
+        ghosts: Draw the visuals of flexible links as translucent ghosts at the rest pose
+            (off for trajectories, where the rest pose is only the first sample).
+    """
+
+    def __init__(self, writer: SceneWriter, model: FlexibleModel, q: np.ndarray, y=None,
+                 stations_per_element: int = 8, ghosts: bool = True):
+        self.writer = writer
+        self.model = model
+        self.q = model.check_q(q)
+        self.y = model.check_y(y)
+        self.spe = int(stations_per_element)
+        self.ghosts = bool(ghosts)
+        self.rest = pose_state(model, self.q, self.spe)
+        self.size_m = characteristic_length(self.rest)
+        radii = [shapes.beam_radius_m(model, link) for link in model._flex]
+        self.joint_radius_m = max(1.6 * max(radii, default=0.0), 0.015 * self.size_m)
+        self.beam_radius_m = {
+            link: max(r, 0.4 * self.joint_radius_m) for link, r in zip(model._flex, radii)
+        }
+        self.visual_model = load_visual_model(model)
+        self._geoms: list[tuple[str, str, pin.SE3]] = []
+        self._load()
+
+    # ------------------------------------------------------------------ states
+    def pose_state(self, q: np.ndarray) -> RobotState:
+        """Rigid robot at pose ``q``: straight beams."""
+        return pose_state(self.model, q, self.spe)
+
+    def mode_states(self, result: ModalResult, mode: int, scales: np.ndarray) -> list[RobotState]:
+        """The robot moved by one mode at each scale (see :func:`mode_states`)."""
+        return mode_states(self.model, result, mode, scales, self.spe)
+
+    # ------------------------------------------------------------------ objects
+    def _load(self) -> None:
+        import meshcat.geometry as mg
+
+        model, writer, rest = self.model, self.writer, self.rest
+        with_visual = set()
+        if self.visual_model is not None and self.visual_model.ngeoms:
+            with_visual = self._load_visuals()
+        joint_mat = mg.MeshPhongMaterial(color=JOINT_COLOUR)
+        link_mat = mg.MeshPhongMaterial(color=LINK_COLOUR)
+        desc = model.description
+        self._markers: list[tuple[str, list[tuple[str, np.ndarray]]]] = []
+        for link in desc.links:
+            if link in with_visual or link in model._flex:
+                continue
+            M = rest.links[link]
+            writer.add(f"markers/{link}", mg.Sphere(0.8 * self.joint_radius_m), link_mat,
+                       M.homogeneous)
+            offsets = []
+            for jn in desc.child_joints.get(link, ()):
+                xyz = desc.joints[jn].xyz
+                if np.linalg.norm(xyz) > 1e-9:
+                    T, sc = segment_matrix(np.zeros(3), xyz)
+                    writer.add(f"offsets/{link}/{jn}", mg.Cylinder(1.0, 0.5 * self.joint_radius_m),
+                               link_mat, M.homogeneous @ T, sc)
+                    offsets.append((jn, T))
+            self._markers.append((link, offsets))
+        rigid_visual = with_visual - set(model._flex)
+        self._joints = [
+            name for name in model.joint_names
+            if desc.joints[name].child not in rigid_visual
+            and desc.joints[name].parent not in rigid_visual
+        ]
+        for name in self._joints:
+            child = desc.joints[name].child
+            writer.add(f"joints/{name}", mg.Sphere(self.joint_radius_m), joint_mat,
+                       rest.links[child].homogeneous)
+        for link, st in rest.beams.items():
+            mat = mg.MeshPhongMaterial(color=BEAM_COLOUR)
+            for i in range(st.shape[0] - 1):
+                T, sc = segment_matrix(st[i], st[i + 1])
+                writer.add(f"beams/{link}/{i}", mg.Cylinder(1.0, self.beam_radius_m[link]), mat,
+                           T, sc)
+        self._masses = []
+        values = dict(model._pm_values)
+        values.update({d.name: float(v) for d, v in zip(model.design, self.y)})
+        for pm in desc.point_masses:
+            mass = values[pm.name]
+            if mass <= 0.0:
+                continue
+            r = (3.0 * mass / (4.0 * np.pi * MASS_SPHERE_DENSITY)) ** (1.0 / 3.0)
+            path = f"masses/{pm.name}"
+            writer.add(path, mg.Sphere(r), mg.MeshPhongMaterial(color=MASS_COLOUR),
+                       translation(self.mass_position(rest, pm.link, pm.xyz)))
+            self._masses.append((path, pm.link, pm.xyz))
+
+    def _load_visuals(self) -> set[str]:
+        """Put the URDF visuals in the scene; returns the links that have some.
+
+        Rigid links go through Pinocchio's ``MeshcatVisualizer``; visuals of flexible links are
+        loaded here with a translucent material (a mesh's own materials cannot be overridden
+        through Pinocchio's loader) and stay at the rest pose.
+        """
+        import meshcat.geometry as mg
+        from pinocchio.visualize import MeshcatVisualizer
+        from pinocchio.visualize.meshcat_visualizer import hasMeshFileInfo
+
+        model, writer, rest = self.model, self.writer, self.rest
+        frames = model.model.frames
+        rigid = pin.GeometryModel()
+        ghosts = []
+        links = set()
+        for g in self.visual_model.geometryObjects:
+            link = frames[g.parentFrame].name
+            links.add(link)
+            if link in model._flex:
+                ghosts.append((g, link))
+            else:
+                rigid.addGeometryObject(g)
+        viz = MeshcatVisualizer(model.model, None, rigid)
+        viz.initViewer(viewer=writer.vis, open=False)
+        viz.loadViewerModel(rootNodeName=f"{ROOT}/robot")
+        viz.display(model.pin_configuration(self.q))
+        for i, g in enumerate(rigid.geometryObjects):
+            link = frames[g.parentFrame].name
+            lMg = rest.links[link].actInv(viz.visual_data.oMg[i])
+            self._geoms.append((f"robot/visuals/{g.name}", link, lMg))
+        readers = {".dae": mg.DaeMeshGeometry, ".stl": mg.StlMeshGeometry,
+                   ".obj": mg.ObjMeshGeometry}
+        ghost = mg.MeshPhongMaterial(color=rgb_int(GHOST_RGBA[:3]), opacity=GHOST_RGBA[3],
+                                     transparent=True, depthWrite=False)
+        for g, link in ghosts if self.ghosts else ():
+            if hasMeshFileInfo(g):
+                geometry = readers[Path(g.meshPath).suffix.lower()].from_file(g.meshPath)
+            else:
+                geometry = viz.loadPrimitive(g)
+            if geometry is None:
+                continue
+            frame = frames[g.parentFrame]
+            oMg = rest.links[link] * frame.placement.actInv(g.placement)
+            writer.add(f"ghosts/{g.name}", geometry, ghost, oMg.homogeneous,
+                       np.asarray(g.meshScale, dtype=float))
+        return links
+
+    def mass_position(self, state: RobotState, link: str, xyz: np.ndarray) -> np.ndarray:
+        """World position of a point of a link: on the drawn beam for a flexible link."""
+        if link not in self.model._flex:
+            return state.links[link].act(np.asarray(xyz, dtype=float))
+        spec = self.model._flex[link].spec
+        axial = stations_local(self.model, link, self.spe) @ (spec.tip / spec.length_m)
+        s = float(np.clip(xyz @ spec.tip / spec.length_m, 0.0, spec.length_m))
+        st = state.beams[link]
+        return np.array([np.interp(s, axial, st[:, c]) for c in range(3)])
+
+    # ------------------------------------------------------------------ keyframes
+    def key(self, frame: int, state: RobotState, beam_rgb: np.ndarray | None = None) -> None:
+        """Record a keyframe of every moving object."""
+        writer, model = self.writer, self.model
+        for path, link, lMg in self._geoms:
+            writer.key(frame, path, (state.links[link] * lMg).homogeneous)
+        for link, offsets in self._markers:
+            M = state.links[link].homogeneous
+            writer.key(frame, f"markers/{link}", M)
+            for jn, T in offsets:
+                writer.key(frame, f"offsets/{link}/{jn}", M @ T)
+        for name in self._joints:
+            child = model.description.joints[name].child
+            writer.key(frame, f"joints/{name}", state.links[child].homogeneous)
+        for link, st in state.beams.items():
+            for i in range(st.shape[0] - 1):
+                T, sc = segment_matrix(st[i], st[i + 1])
+                writer.key(frame, f"beams/{link}/{i}", T, sc, beam_rgb)
+        for path, link, xyz in self._masses:
+            writer.key(frame, path, translation(self.mass_position(state, link, xyz)))
+
+
+def stations_local(model: FlexibleModel, link: str, stations_per_element: int) -> np.ndarray:
+    """Drawing stations of a flexible link in its link frame, (n_st, 3) [m]."""
+    spec = model._flex[link].spec
+    n_el = spec.elements
+    xi = np.linspace(0.0, 1.0, int(stations_per_element) + 1)[:-1]
+    s = np.append((np.arange(n_el)[:, None] + xi[None, :]).ravel(), n_el) / n_el
+    return s[:, None] * spec.tip[None, :]
+
+
+def pose_state(model: FlexibleModel, q: np.ndarray, stations_per_element: int = 8) -> RobotState:
+    """The rigid robot at pose ``q`` (user coordinates): link placements and straight beams."""
+    links = shapes.link_placements(model, q)
+    beams = {}
+    for link in model._flex:
+        M = links[link]
+        st = stations_local(model, link, stations_per_element)
+        beams[link] = st @ M.rotation.T + M.translation
+    return RobotState(links, beams)
+
+
+def mode_states(model: FlexibleModel, result: ModalResult, mode: int, scales,
+                stations_per_element: int = 8) -> list[RobotState]:
+    """The robot moved by one mode at each scale ``s``.
+
+    Beams follow :func:`shapes.centrelines` (``p₀ + s·d``); links are displaced by ``s`` times
+    their twist (:func:`shapes.link_twists`) through the exponential map.
+    """
+    lines = shapes.centrelines(model, result, mode, stations_per_element)
+    twists = shapes.link_twists(model, result.q, result.shapes[:, mode - 1 : mode])
+    rest = shapes.link_placements(model, result.q)
+    out = []
+    for s in np.asarray(scales, dtype=float):
+        links = {k: shapes.displaced(M, twists[k][0], s) for k, M in rest.items()}
+        beams = {k: c.at(s) for k, c in lines.items()}
+        out.append(RobotState(links, beams))
+    return out
+
+
+def characteristic_length(state: RobotState) -> float:
+    """Size of the drawn robot [m]: the diagonal of the box around link origins and beams."""
+    pts = scene_points(state)
+    return max(float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))), 1e-3)
+
+
+def scene_points(state: RobotState) -> np.ndarray:
+    """Link origins and beam stations of a state, (n, 3) [m]."""
+    pts = [M.translation for M in state.links.values()]
+    pts += [p for st in state.beams.values() for p in st]
+    return np.array(pts)
