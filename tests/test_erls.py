@@ -143,3 +143,15 @@ def test_node_motion_of_a_mode_matches_its_elastic_coordinates(two_link_planar):
     # elastic motion is orthogonal to nothing in particular, but the planar model moves in-plane
     assert np.abs(r.node_motion["link1"][..., 2]).max() < 1e-14
     assert np.abs(r.node_motion["link1"][..., 3:5]).max() < 1e-14
+
+
+def test_panda_overlay_loads_and_is_invariant_about_the_vertical():
+    """The flexible Panda overlay has 9 rigid modes and frequencies independent of joint 1."""
+    from conftest import ROOT
+
+    m = FlexibleModel(ROOT / "urdf" / "panda_flexible.xml")
+    assert m.nv == 9 and m.nx == 60
+    q = np.array([0.1, -0.5, 0.3, -2.0, 0.2, 1.5, 0.7, 0.01, 0.01])
+    q2 = q.copy()
+    q2[0] += 1.3
+    np.testing.assert_allclose(m.frequencies(q2), m.frequencies(q), rtol=1e-8)
