@@ -200,3 +200,15 @@ class IKNotConverged(PinflexError):
 
 class InvalidAssignmentProblem(PinflexError):
     """Inputs of the assignment QP have inconsistent shapes or non-finite values."""
+
+
+class BatchError(PinflexError):
+    """A batch study cannot run: bad study settings, cluster or scheduler address."""
+
+
+class InvalidSweep(BatchError):
+    """A ``--sweep KEY=V1,V2`` option names an unknown key or carries an unusable value."""
+
+
+class StoreError(BatchError):
+    """A batch result store cannot be opened or written, or has another schema version."""
