@@ -1,0 +1,277 @@
+"""Sweeps of assignment studies: ``--sweep KEY=V1,V2,...`` over a TOML study.
+
+A sweep option names a key of the study file (:mod:`pinflex.config`) by its dotted TOML path,
+with list entries by index, and the values it takes::
+
+    --sweep targets.0.freq_hz=185,190,195         # the first [[targets]] entry
+    --sweep constraints.mass_budget_kg=0.1,0.2
+    --sweep expansion.order=2,4
+    --sweep trajectory.csv=slow.csv,fast.csv       # paths relative to the study file
+    --sweep 'expansion.q0=[1.817,5.312],[1.9,5.2]'
+
+Values are TOML literals (numbers, booleans, ``[arrays]``, quoted strings); a value that is
+not valid TOML is taken as a bare string. Commas inside brackets or quotes do not split values.
+Several ``--sweep`` options form the Cartesian product (targets x trajectories x constraints),
+the first option varying slowest.
+
+Sweepable keys: ``robot``, ``planar``, ``trajectory.builtin``, ``trajectory.csv``,
+``expansion.{order, quantity, q0}``, ``expansion.y0.NAME``, ``targets.I.{mode, freq_hz, weight}``,
+``constraints.mass_budget_kg``, ``constraints.floors.I.{mode, freq_hz}``,
+``constraints.bands.I.{mode, low_hz, high_hz}``, ``options.refine``, ``options.baseline.NAME``,
+``options.report_modes``.
+
+A case is identified by the hash of the study file's text, the text of the files it reads
+(robot description, trajectory CSV) and its overrides, so editing the study or adding a value
+to a sweep recomputes exactly the cases that changed.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import itertools
+import re
+import time
+import tomllib
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from pinflex.batch.tasks import _error_text, _worker_address, config_hash
+from pinflex.exceptions import InvalidSweep
+
+KIND = "assign"
+
+_KEYS = (
+    r"robot", r"planar", r"trajectory\.(builtin|csv)", r"expansion\.(order|quantity|q0)",
+    r"expansion\.y0\.\w+", r"targets\.\d+\.(mode|freq_hz|weight)",
+    r"constraints\.mass_budget_kg", r"constraints\.floors\.\d+\.(mode|freq_hz)",
+    r"constraints\.bands\.\d+\.(mode|low_hz|high_hz)", r"options\.refine",
+    r"options\.baseline\.\w+", r"options\.report_modes",
+)
+SWEEPABLE = ("robot", "planar", "trajectory.builtin", "trajectory.csv", "expansion.order",
+             "expansion.quantity", "expansion.q0", "expansion.y0.NAME",
+             "targets.I.mode", "targets.I.freq_hz", "targets.I.weight",
+             "constraints.mass_budget_kg", "constraints.floors.I.mode",
+             "constraints.floors.I.freq_hz", "constraints.bands.I.mode",
+             "constraints.bands.I.low_hz", "constraints.bands.I.high_hz", "options.refine",
+             "options.baseline.NAME", "options.report_modes")
+
+
+def split_values(text: str) -> list[str]:
+    """Split ``V1,V2,...`` on commas outside brackets and quotes."""
+    parts, depth, quote, current = [], 0, "", []
+    for ch in text:
+        if quote:
+            quote = "" if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch in "[{":
+            depth += 1
+        elif ch in "]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append("".join(current).strip())
+            current = []
+            continue
+        current.append(ch)
+    parts.append("".join(current).strip())
+    return parts
+
+
+def parse_value(text: str):
+    """A TOML literal, or the bare string if the text is not one."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def parse_sweeps(options: list[str] | None) -> list[tuple[str, list]]:
+    """Parse ``--sweep KEY=V1,V2`` options into ``[(key, values), ...]``.
+
+    Raises:
+        InvalidSweep: For a missing ``=``, an empty value, an unknown or repeated key.
+    """
+    out: list[tuple[str, list]] = []
+    for option in options or ():
+        key, sep, text = option.partition("=")
+        key = key.strip()
+        if not sep or not text.strip():
+            raise InvalidSweep(f"--sweep {option!r}: expected KEY=V1,V2,... "
+                               "(e.g. targets.0.freq_hz=185,190,195)")
+        if not any(re.fullmatch(pattern, key) for pattern in _KEYS):
+            raise InvalidSweep(f"--sweep key {key!r} is not sweepable; sweepable keys: "
+                               f"{', '.join(SWEEPABLE)} (I = list index, NAME = design "
+                               "variable)")
+        if key in (k for k, _ in out):
+            raise InvalidSweep(f"--sweep key {key!r} is given twice; list all its values in "
+                               "one option")
+        values = [parse_value(v) for v in split_values(text)]
+        if any(v == "" for v in values):
+            raise InvalidSweep(f"--sweep {option!r} has an empty value")
+        out.append((key, values))
+    return out
+
+
+def sweep_cases(sweeps: list[tuple[str, list]]) -> list[dict]:
+    """Cartesian product of the sweeps, first sweep slowest: a list of ``{key: value}``."""
+    keys = [k for k, _ in sweeps]
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(v for _, v in sweeps))]
+
+
+def _index(items: list, index: str, key: str) -> int:
+    i = int(index)
+    if i >= len(items):
+        raise InvalidSweep(f"--sweep key {key!r}: the study has {len(items)} entries there "
+                           f"(indices 0..{len(items) - 1})")
+    return i
+
+
+def apply_overrides(cfg, overrides: dict):
+    """A copy of an :class:`~pinflex.config.AssignmentConfig` with sweep values applied.
+
+    Raises:
+        InvalidSweep: For an index out of range or a value of the wrong type.
+    """
+    from pinflex.config import resolve
+
+    cfg = copy.deepcopy(cfg)
+    for key, value in overrides.items():
+        parts = key.split(".")
+        try:
+            if key == "robot":
+                cfg.robot = resolve(str(value), cfg.folder)
+            elif key == "planar":
+                cfg.planar = bool(value)
+            elif parts[0] == "trajectory":
+                cfg.trajectory = {parts[1]: str(value)}
+            elif key == "expansion.order":
+                cfg.order = int(value)
+            elif key == "expansion.quantity":
+                cfg.quantity = str(value)
+            elif key == "expansion.q0":
+                cfg.q0 = np.array(value, dtype=float)
+            elif parts[:2] == ["expansion", "y0"]:
+                cfg.y0 = dict(cfg.y0 or {}, **{parts[2]: float(value)})
+            elif parts[0] == "targets":
+                i = _index(cfg.targets, parts[1], key)
+                field = parts[2]
+                cast = int if field == "mode" else float
+                cfg.targets[i] = replace(cfg.targets[i], **{field: cast(value)})
+            elif key == "constraints.mass_budget_kg":
+                cfg.mass_budget_kg = float(value)
+            elif parts[:2] == ["constraints", "floors"]:
+                i = _index(cfg.floors, parts[2], key)
+                mode, freq = cfg.floors[i]
+                cfg.floors[i] = ((int(value), freq) if parts[3] == "mode"
+                                 else (mode, float(value)))
+            elif parts[:2] == ["constraints", "bands"]:
+                i = _index(cfg.bands, parts[2], key)
+                band = list(cfg.bands[i])
+                slot = ("mode", "low_hz", "high_hz").index(parts[3])
+                band[slot] = int(value) if slot == 0 else float(value)
+                cfg.bands[i] = tuple(band)
+            elif key == "options.refine":
+                cfg.refine = bool(value)
+            elif parts[:2] == ["options", "baseline"]:
+                cfg.baseline = dict(cfg.baseline or {}, **{parts[2]: float(value)})
+            elif key == "options.report_modes":
+                cfg.report_modes = [int(m) for m in np.atleast_1d(value)]
+            else:  # pragma: no cover - parse_sweeps admits only the keys above
+                raise InvalidSweep(f"--sweep key {key!r} is not sweepable")
+        except (TypeError, ValueError) as exc:
+            raise InvalidSweep(f"--sweep {key}={value!r}: {exc}") from exc
+    return cfg
+
+
+def _file_digest(path: Path | None) -> str | None:
+    if path is None or not Path(path).is_file():
+        return None
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def case_config(config_path: Path, cfg, overrides: dict) -> dict:
+    """The configuration a case's hash covers: file digests and overrides."""
+    from pinflex.config import resolve
+
+    csv = cfg.trajectory.get("csv")
+    return {
+        "kind": KIND,
+        "study_file": Path(config_path).name,
+        "study_sha256": _file_digest(config_path),
+        "robot_sha256": _file_digest(cfg.robot),
+        "trajectory": dict(cfg.trajectory),
+        "trajectory_sha256": _file_digest(resolve(csv, cfg.folder)) if csv else None,
+        "overrides": overrides,
+    }
+
+
+def plan_cases(config_path: str | Path, sweeps: list[tuple[str, list]]):
+    """Load the study and build every case of the sweep.
+
+    Returns:
+        A list of ``(config_hash, case_config, assignment_config, overrides)``.
+
+    Raises:
+        ConfigurationError: If the study file is invalid.
+        InvalidSweep: If a sweep does not apply to it.
+    """
+    from pinflex.config import load_config
+
+    base = load_config(config_path)
+    out = []
+    for overrides in sweep_cases(sweeps):
+        cfg = apply_overrides(base, overrides)
+        config = case_config(Path(config_path), cfg, overrides)
+        out.append((config_hash(config), config, cfg, overrides))
+    return out
+
+
+def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
+    """Solve one assignment case and verify it with the exact model (runs on a worker).
+
+    The key is (seed 0, item 0, config_hash): a case is identified by its configuration only.
+
+    Returns:
+        A one-element list with the row; failures are recorded, never raised.
+    """
+    from pinflex.config import run_config
+
+    t0 = time.perf_counter()
+    row = {"seed": 0, "item": 0, "config_hash": chash, "kind": KIND, "status": "failed",
+           "error": None, "params": {"case": case, "overrides": overrides}, "truth": None,
+           "result": None, "metrics": {}, "worker": _worker_address()}
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            _, _, result = run_config(cfg)
+        row["truth"] = {"modes": list(result.modes),
+                        "freq_before_hz_range": [result.freq_before_hz.min(axis=0).tolist(),
+                                                 result.freq_before_hz.max(axis=0).tolist()],
+                        "freq_after_hz_range": [result.freq_after_hz.min(axis=0).tolist(),
+                                                result.freq_after_hz.max(axis=0).tolist()]}
+        row["result"] = {
+            "found": bool(result.found), "design": result.design, "y": result.y.tolist(),
+            "y_before": result.y_before.tolist(), "qp_status": result.solution.status,
+            "iterations": int(result.solution.iterations), "refinements": result.refinements,
+            "max_error_before": result.max_error_before,
+            "max_error_after": result.max_error_after,
+            "predicted_max_error_after": result.predicted_max_error_after,
+            "warnings": [f"{w.category.__name__}: {w.message}" for w in caught],
+        }
+        row["metrics"] = {"error_before": result.max_error_before,
+                          "error_after": result.max_error_after,
+                          "predicted_error_after": result.predicted_max_error_after}
+        if result.found:
+            row["status"] = "ok"
+        else:
+            row["error"] = f"qp: not solved: {result.solution.status}"
+        row["timings"] = dict(result.timings_s)
+    except Exception as exc:  # noqa: BLE001 - recorded in the row, never re-raised
+        row["error"] = _error_text("assign", exc)
+        row["timings"] = {}
+    row["timings"]["task_s"] = time.perf_counter() - t0
+    return [row]
