@@ -1,0 +1,204 @@
+"""``pinflex batch report``: error distributions, failures and histograms of a result store.
+
+Rows are grouped by study: a PRBDM configuration (its config hash: nR, modes, objective, ...)
+or an assignment study file (all the cases of its sweeps). For each group the report gives the
+row counts, percentiles of every metric over the ``ok`` rows (errors as fractions; the text
+shows percent), mean compute times, and the failures grouped by stage and exception type
+with a few example keys. Histograms of log10 of each error are written as PNG.
+"""
+
+from __future__ import annotations
+
+from collections import Counter, defaultdict
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pinflex.batch.store import ResultStore, Row
+from pinflex.exceptions import StoreError
+
+PERCENTILES = (0, 5, 25, 50, 75, 95, 100)
+
+
+@dataclass
+class GroupReport:
+    """Statistics of one group of rows.
+
+    Attributes:
+        name: Group label (e.g. ``prbdm 4R/4 modes eigen ...``).
+        kind: ``"prbdm"`` or ``"assign"``.
+        config_hashes: Configurations in the group.
+        n_ok: Rows with status ``ok``.
+        n_failed: Rows with status ``failed``.
+        metrics: ``{metric: {"n", "mean", "p0", "p5", ..., "p100"}}`` over ok rows [-].
+        timings_s: Mean compute time of each stage over the rows that report it [s].
+        failures: ``[(stage_and_type, count, [example "seed/item/hash: message", ...])]``.
+    """
+
+    name: str
+    kind: str
+    config_hashes: list[str] = field(default_factory=list)
+    n_ok: int = 0
+    n_failed: int = 0
+    metrics: dict[str, dict[str, float]] = field(default_factory=dict)
+    timings_s: dict[str, float] = field(default_factory=dict)
+    failures: list[tuple[str, int, list[str]]] = field(default_factory=list)
+
+
+@dataclass
+class Report:
+    """Report of a whole store: one :class:`GroupReport` per study group."""
+
+    path: str
+    groups: list[GroupReport]
+
+    def to_dict(self) -> dict:
+        """Plain dictionary (JSON-ready)."""
+        return {"store": self.path, "groups": [vars(g) for g in self.groups]}
+
+    def text(self) -> str:
+        """Human-readable report."""
+        if not self.groups:
+            return f"{self.path}: no rows"
+        out = [f"store {self.path}"]
+        for g in self.groups:
+            total = g.n_ok + g.n_failed
+            out.append("")
+            out.append(f"== {g.name}: {total} rows, {g.n_ok} ok, {g.n_failed} failed")
+            if g.metrics:
+                head = "".join(f"{'p' + str(p):>10}" for p in PERCENTILES)
+                out.append(f"  {'error [%]':<26}{'n':>6}{head}{'mean':>10}")
+                for name, st in g.metrics.items():
+                    vals = "".join(f"{100 * st['p' + str(p)]:>10.3g}" for p in PERCENTILES)
+                    out.append(f"  {name:<26}{int(st['n']):>6}{vals}{100 * st['mean']:>10.3g}")
+            if g.timings_s:
+                out.append("  mean time: " + ", ".join(
+                    f"{k.removesuffix('_s')} {v:.3g} s" for k, v in g.timings_s.items()))
+            for label, count, examples in g.failures:
+                out.append(f"  failed {count}x {label}")
+                for example in examples:
+                    out.append(f"      {example}")
+        return "\n".join(out)
+
+
+def _group_of(row: Row, configs: dict) -> tuple[str, str]:
+    kind, config = configs.get(row.config_hash, (row.kind, {}))
+    if row.kind == "assign":
+        return f"assign:{config.get('study_sha256')}", (
+            f"assign {config.get('study_file', '?')} (sweep)")
+    fit, beam = config.get("fit", {}), config.get("beam", {})
+    return row.config_hash, (
+        f"prbdm {fit.get('n_joints')}R/{fit.get('n_modes')} modes, {fit.get('objective')}, "
+        f"{fit.get('n_starts')} starts, p = {beam.get('n_sections')} "
+        f"[{row.config_hash}]")
+
+
+def _stats(values: list[float]) -> dict[str, float]:
+    a = np.asarray(values, dtype=float)
+    out = {"n": float(a.size), "mean": float(a.mean())}
+    out.update({f"p{p}": float(v) for p, v in zip(PERCENTILES, np.percentile(a, PERCENTILES))})
+    return out
+
+
+def _metric_values(rows: list[Row]) -> dict[str, list[float]]:
+    values: dict[str, list[float]] = defaultdict(list)
+    for row in rows:
+        if row.status != "ok":
+            continue
+        for name, v in row.metrics.items():
+            if v is not None and np.isfinite(v):
+                values[name].append(float(v))
+    return values
+
+
+def build_report(path: str | Path, n_examples: int = 3) -> Report:
+    """Statistics of every study group in a store.
+
+    Raises:
+        StoreError: If the file does not exist or is not a store.
+    """
+    if not Path(path).is_file():
+        raise StoreError(f"no store at '{path}'; pass the --store file of a batch run")
+    with ResultStore(path) as store:
+        configs = store.configs()
+        grouped: dict[str, tuple[str, list[Row]]] = {}
+        for row in store.rows():
+            key, name = _group_of(row, configs)
+            grouped.setdefault(key, (name, []))[1].append(row)
+    groups = []
+    for key, (name, rows) in grouped.items():
+        g = GroupReport(name=name, kind=rows[0].kind,
+                        config_hashes=sorted({r.config_hash for r in rows}))
+        g.n_ok = sum(r.status == "ok" for r in rows)
+        g.n_failed = len(rows) - g.n_ok
+        g.metrics = {m: _stats(v) for m, v in sorted(_metric_values(rows).items()) if v}
+        times: dict[str, list[float]] = defaultdict(list)
+        for r in rows:
+            for k, v in r.timings.items():
+                times[k].append(float(v))
+        g.timings_s = {k: float(np.mean(v)) for k, v in times.items()}
+        kinds: Counter = Counter()
+        examples: dict[str, list[str]] = defaultdict(list)
+        for r in rows:
+            if r.status != "failed":
+                continue
+            parts = (r.error or "unknown: unknown").split(": ", 2)
+            label = ": ".join(parts[:2])
+            kinds[label] += 1
+            if len(examples[label]) < n_examples:
+                message = parts[-1] if len(parts) == 3 else (r.error or "")
+                short = message if len(message) <= 160 else message[:157] + "..."
+                examples[label].append(f"{r.seed}/{r.item}/{r.config_hash}: {short}")
+        g.failures = [(label, count, examples[label]) for label, count in kinds.most_common()]
+        groups.append(g)
+    return Report(str(path), groups)
+
+
+def write_histograms(path: str | Path, out_dir: str | Path | None = None,
+                     bins: int = 40) -> list[Path]:
+    """Histograms of log10(error) for every group and metric, as PNG files.
+
+    Args:
+        path: The store.
+        out_dir: Output folder; default the store's path without suffix + ``-report``.
+        bins: Histogram bins.
+
+    Returns:
+        The written files.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    out = Path(out_dir) if out_dir is not None else path.with_name(path.stem + "-report")
+    out.mkdir(parents=True, exist_ok=True)
+    with ResultStore(path) as store:
+        configs = store.configs()
+        grouped: dict[str, tuple[str, list[Row]]] = {}
+        for row in store.rows(status="ok"):
+            key, name = _group_of(row, configs)
+            grouped.setdefault(key, (name, []))[1].append(row)
+    written = []
+    for index, (key, (name, rows)) in enumerate(sorted(grouped.items())):
+        for metric, values in sorted(_metric_values(rows).items()):
+            positive = np.asarray([v for v in values if v > 0.0])
+            if positive.size == 0:
+                continue
+            fig, ax = plt.subplots(figsize=(6.0, 3.6))
+            ax.hist(np.log10(positive), bins=bins, color="tab:blue", alpha=0.8)
+            ax.axvline(np.log10(np.median(positive)), color="k", lw=1,
+                       label=f"median {100 * np.median(positive):.3g} %")
+            ax.set_xlabel(f"log10 {metric} [-]")
+            ax.set_ylabel("rows")
+            ax.set_title(f"{name}\n{positive.size} rows", fontsize=8)
+            ax.legend(fontsize=8)
+            fig.tight_layout()
+            safe = key.replace(":", "-")
+            file = out / f"{index:02d}_{safe}_{metric}.png"
+            fig.savefig(file, dpi=110)
+            plt.close(fig)
+            written.append(file)
+    return written

@@ -1,0 +1,381 @@
+"""Run batch tasks on Dask ``distributed`` and store every row as it completes.
+
+The client plans the keys, skips those already in the store, submits one task per beam (or
+assignment case) with a bounded number in flight, and writes each returned row in its own
+SQLite transaction as soon as the task completes (``distributed.as_completed``). Workers never
+touch the store. Consequences:
+
+* a killed client loses only the tasks in flight; everything it reported is in the store;
+* a killed worker's task is rescheduled by Dask; a task that kills workers repeatedly comes back
+  as ``KilledWorker`` and is stored as a failed row, so it is not retried forever;
+* rerunning the same command submits only the missing keys (``--retry-failed`` also reruns the
+  stored failures).
+
+The engine is a ``LocalCluster`` on 127.0.0.1 with one single-threaded worker process per core
+by default, or an existing scheduler given by address. Dask's nanny sets
+``OMP_NUM_THREADS = OPENBLAS_NUM_THREADS = MKL_NUM_THREADS = 1`` in worker processes, so one
+task uses one core and results do not depend on how many workers run.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+import uuid
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TextIO
+
+import numpy as np
+
+from pinflex.batch.store import Key, ResultStore
+from pinflex.exceptions import BatchError, MissingDependency
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of work: a function, its arguments and the keys its rows fill.
+
+    Attributes:
+        name: Readable task name (used in the Dask key).
+        keys: Store keys the task's rows fill.
+        func: Importable function run on a worker; returns a list of row dictionaries.
+        args: Positional arguments (plain, picklable data).
+        kind: ``"prbdm"`` or ``"assign"``.
+        params: Row parameters to record if the task dies with its worker.
+    """
+
+    name: str
+    keys: tuple[Key, ...]
+    func: Callable
+    args: tuple
+    kind: str
+    params: dict = field(default_factory=dict)
+
+
+@dataclass
+class BatchSummary:
+    """Outcome of one batch run.
+
+    Attributes:
+        planned: Keys in the study.
+        skipped: Keys already finished in the store before this run.
+        tasks: Tasks submitted by this run.
+        written: Rows written by this run.
+        ok: Rows written with status ``ok``.
+        failed: Rows written with status ``failed``.
+        wall_s: Wall time from the first submission to the last row [s].
+        workers: Worker processes (threads) that served the run.
+        stage_s: Mean compute time per task of each timed stage [s].
+        interrupted: True if the run stopped early (Ctrl-C).
+    """
+
+    planned: int = 0
+    skipped: int = 0
+    tasks: int = 0
+    written: int = 0
+    ok: int = 0
+    failed: int = 0
+    wall_s: float = 0.0
+    workers: int = 0
+    stage_s: dict[str, float] = field(default_factory=dict)
+    interrupted: bool = False
+
+    @property
+    def rate_per_s(self) -> float:
+        """Tasks completed per second of wall time [1/s]."""
+        return self.tasks / self.wall_s if self.wall_s > 0 else float("nan")
+
+    def text(self, unit: str = "task") -> str:
+        """Multi-line human summary."""
+        lines = [f"{self.planned} keys planned, {self.skipped} already in the store, "
+                 f"{self.tasks} {unit}s run on {self.workers} worker(s)"
+                 + (" (interrupted)" if self.interrupted else "")]
+        if self.tasks:
+            lines.append(f"{self.written} rows written: {self.ok} ok, {self.failed} failed; "
+                         f"{self.wall_s:.1f} s wall, {self.rate_per_s:.3g} {unit}s/s")
+        if self.stage_s:
+            lines.append("mean compute per " + unit + ": " + ", ".join(
+                f"{k.removesuffix('_s')} {v:.3g} s" for k, v in self.stage_s.items()))
+        return "\n".join(lines)
+
+
+class ProgressBar:
+    """Text progress bar with rate and ETA on a stream (stderr by default).
+
+    On a terminal the bar is redrawn in place at most ten times a second; elsewhere (a log
+    file, a pipe) a line is printed at most every ``log_interval_s`` and at the end.
+    """
+
+    def __init__(self, total: int, label: str, enabled: bool = True,
+                 stream: TextIO | None = None, width: int = 24, log_interval_s: float = 10.0):
+        self.total, self.label, self.enabled, self.width = total, label, enabled, width
+        self.stream = stream or sys.stderr
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.log_interval_s = log_interval_s
+        self.done = self.failed = 0
+        self.start = time.perf_counter()
+        self._last = -np.inf
+
+    def line(self) -> str:
+        """The current bar as text."""
+        elapsed = time.perf_counter() - self.start
+        rate = self.done / elapsed if elapsed > 0 else 0.0
+        frac = self.done / self.total if self.total else 1.0
+        filled = int(round(self.width * frac))
+        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
+        fails = f", {self.failed} failed" if self.failed else ""
+        return (f"{self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
+                f"{self.done}/{self.total} {100 * frac:3.0f}% {rate:.3g}/s "
+                f"ETA {_duration(eta)} elapsed {_duration(elapsed)}{fails}")
+
+    def update(self, done: int = 1, failed: int = 0) -> None:
+        """Count finished tasks (``failed`` of them failed) and redraw if due."""
+        self.done += done
+        self.failed += failed
+        self._draw(final=self.done >= self.total)
+
+    def close(self) -> None:
+        """Draw the final state."""
+        self._draw(final=True)
+
+    def _draw(self, final: bool) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        interval = 0.1 if self.tty else self.log_interval_s
+        if not final and now - self._last < interval:
+            return
+        self._last = now
+        if self.tty:
+            self.stream.write("\r" + self.line() + ("\n" if final else ""))
+        else:
+            self.stream.write(self.line() + "\n")
+        self.stream.flush()
+        if final:
+            self.enabled = False  # draw the final line once
+
+
+def _duration(seconds: float) -> str:
+    if not np.isfinite(seconds):
+        return "--:--"
+    seconds = int(round(seconds))
+    h, rest = divmod(seconds, 3600)
+    m, s = divmod(rest, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m:02d}:{s:02d}"
+
+
+def connect(scheduler: str | None = None, workers: int | None = None):
+    """A Dask client: to ``scheduler`` if given, else to a new local cluster.
+
+    Args:
+        scheduler: Address of a running scheduler (e.g. ``tcp://10.0.0.5:8786``).
+        workers: Worker processes of the local cluster (default: one per core); each has one
+            thread.
+
+    Returns:
+        ``(client, cluster)``; ``cluster`` is None for an external scheduler.
+
+    Raises:
+        MissingDependency: If ``distributed`` is not installed.
+        BatchError: If the scheduler does not answer, or both arguments are given.
+    """
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as exc:
+        raise MissingDependency("dask[distributed]", "pinflex batch") from exc
+    if scheduler:
+        if workers is not None:
+            raise BatchError("--workers sizes the local cluster; with --scheduler, start as "
+                             "many `dask worker` processes as you want instead")
+        try:
+            return Client(scheduler, timeout="20s"), None
+        except (OSError, TimeoutError) as exc:
+            raise BatchError(f"no Dask scheduler answers at {scheduler} ({exc}); start one "
+                             "with `dask scheduler` and pass the address it prints") from exc
+    n = int(workers) if workers is not None else (os.cpu_count() or 1)
+    if n < 1:
+        raise BatchError(f"--workers {n} must be >= 1")
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                           host="127.0.0.1", dashboard_address=None,
+                           silence_logs=logging.ERROR)
+    return Client(cluster), cluster
+
+
+def _killed_rows(task: Task, exc: BaseException) -> list[dict]:
+    text = f"worker: {type(exc).__name__}: {exc}"
+    return [{"seed": s, "item": i, "config_hash": h, "kind": task.kind, "status": "failed",
+             "error": text, "params": task.params, "truth": None, "result": None,
+             "metrics": {}, "timings": {}, "worker": None} for s, i, h in task.keys]
+
+
+def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: int,
+              scheduler: str | None = None, workers: int | None = None,
+              retry_failed: bool = False, progress: bool = True, label: str = "batch",
+              max_in_flight: int | None = None) -> BatchSummary:
+    """Run tasks on Dask and write their rows to the store as they complete.
+
+    Args:
+        store: The result store (written by this process only).
+        tasks: Tasks to run (keys already finished must be filtered out by the caller).
+        planned: Keys in the whole study (for the summary).
+        skipped: Keys already finished (for the summary).
+        scheduler: Address of an existing scheduler, or None for a local cluster.
+        workers: Worker processes of the local cluster.
+        retry_failed: Whether a new row may replace a stored failure.
+        progress: Show the progress bar on stderr.
+        label: Progress-bar label.
+        max_in_flight: Most tasks submitted at once; default four per worker thread (and at
+            least 16), which keeps workers busy and the client's memory bounded.
+
+    Returns:
+        The run's summary.
+    """
+    summary = BatchSummary(planned=planned, skipped=skipped)
+    if not tasks:
+        return summary
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    client, cluster = connect(scheduler, workers)
+    stage_sum: dict[str, float] = {}
+    try:
+        threads = sum(client.nthreads().values())
+        summary.workers = threads
+        limit = max_in_flight or max(16, 4 * threads)
+        token = uuid.uuid4().hex[:8]
+        queue = list(tasks)[::-1]
+        owner = {}
+
+        def submit():
+            task = queue.pop()
+            future = client.submit(task.func, *task.args, key=f"{task.name}-{token}",
+                                   pure=False, retries=0)
+            owner[future.key] = task
+            return future
+
+        bar = ProgressBar(len(tasks), label, progress)
+        start = time.perf_counter()
+        pending = as_completed([submit() for _ in range(min(limit, len(queue)))])
+        try:
+            for future in pending:
+                task = owner.pop(future.key)
+                try:
+                    rows = future.result()
+                except KilledWorker as exc:
+                    rows = _killed_rows(task, exc)
+                finally:
+                    future.release()
+                written = store.write(rows, replace_failed=retry_failed)
+                summary.tasks += 1
+                summary.written += written
+                n_failed = sum(r["status"] == "failed" for r in rows)
+                summary.failed += n_failed
+                summary.ok += len(rows) - n_failed
+                _add_stages(stage_sum, rows)
+                bar.update(1, int(n_failed > 0))
+                if queue:
+                    pending.add(submit())
+        except KeyboardInterrupt:
+            summary.interrupted = True
+        finally:
+            summary.wall_s = time.perf_counter() - start
+            bar.close()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    if summary.tasks:
+        summary.stage_s = {k: v / summary.tasks for k, v in stage_sum.items()}
+    return summary
+
+
+def _add_stages(acc: dict[str, float], rows: list[dict]) -> None:
+    """Accumulate per-task stage times: shared stages once, per-row stages summed."""
+    if not rows:
+        return
+    for name in ("beam_s", "truth_s", "task_s"):
+        if name in rows[0]["timings"]:
+            acc[name] = acc.get(name, 0.0) + float(rows[0]["timings"][name])
+    for name in ("fit_s", "total"):
+        values = [r["timings"][name] for r in rows if name in r["timings"]]
+        if values:
+            acc[name] = acc.get(name, 0.0) + float(sum(values))
+
+
+def run_prbdm(study, store_path: str | Path, scheduler: str | None = None,
+              workers: int | None = None, retry_failed: bool = False,
+              progress: bool = True) -> BatchSummary:
+    """Run (or resume) a random-beam PRBDM study.
+
+    Args:
+        study: The :class:`~pinflex.batch.tasks.PrbdmStudy`.
+        store_path: SQLite store file.
+        scheduler: Address of an existing Dask scheduler; default a local cluster.
+        workers: Worker processes of the local cluster (default one per core).
+        retry_failed: Rerun keys stored as failed.
+        progress: Show the progress bar on stderr.
+
+    Returns:
+        The run's summary.
+    """
+    from pinflex.batch.tasks import KIND, config_hash, run_prbdm_beam
+
+    configs = [(config_hash(c), c) for c in study.configs()]
+    shared = {"beam": study.beam_settings(), "truth": study.truth_settings()}
+    with ResultStore(store_path) as store:
+        for chash, config in configs:
+            store.add_config(chash, KIND, config)
+        done = store.finished_keys(include_failed=not retry_failed)
+        tasks, skipped = [], 0
+        for item in range(study.n_beams):
+            todo = [(h, c) for h, c in configs if (study.seed, item, h) not in done]
+            skipped += len(configs) - len(todo)
+            if todo:
+                tasks.append(Task(name=f"prbdm-{study.seed}-{item}",
+                                  keys=tuple((study.seed, item, h) for h, _ in todo),
+                                  func=run_prbdm_beam, args=(shared, study.seed, item, todo),
+                                  kind=KIND, params={"beam_index": item}))
+        return run_tasks(store, tasks, study.n_beams * len(configs), skipped, scheduler,
+                         workers, retry_failed, progress, label="beams")
+
+
+def run_assign(config_path: str | Path, sweeps: list[tuple[str, list]],
+               store_path: str | Path, scheduler: str | None = None,
+               workers: int | None = None, retry_failed: bool = False,
+               progress: bool = True) -> BatchSummary:
+    """Run (or resume) a sweep of assignment studies.
+
+    Args:
+        config_path: TOML study file (:mod:`pinflex.config`).
+        sweeps: Parsed ``--sweep`` options (:func:`~pinflex.batch.sweep.parse_sweeps`).
+        store_path: SQLite store file.
+        scheduler: Address of an existing Dask scheduler; default a local cluster.
+        workers: Worker processes of the local cluster (default one per core).
+        retry_failed: Rerun keys stored as failed.
+        progress: Show the progress bar on stderr.
+
+    Returns:
+        The run's summary.
+    """
+    from pinflex.batch.sweep import KIND, plan_cases, run_assign_case
+
+    cases = plan_cases(config_path, sweeps)
+    with ResultStore(store_path) as store:
+        done = store.finished_keys(include_failed=not retry_failed)
+        tasks, skipped, seen = [], 0, set()
+        for index, (chash, config, cfg, overrides) in enumerate(cases):
+            store.add_config(chash, KIND, config)
+            key = (0, 0, chash)
+            if key in done or key in seen:
+                skipped += key in done
+                continue
+            seen.add(key)
+            tasks.append(Task(name=f"assign-{index}", keys=(key,), func=run_assign_case,
+                              args=(cfg, overrides, chash, index), kind=KIND,
+                              params={"case": index, "overrides": overrides}))
+        return run_tasks(store, tasks, len(cases), skipped, scheduler, workers, retry_failed,
+                         progress, label="cases")
