@@ -201,7 +201,7 @@ def trajectory_preview(
         drawing.key(int(frame_of[i]), states[i], colours[i])
     writer.finish()
     if labels is None:
-        labels = [f"t = {t:.3f} s · mode {mode}: {f:.2f} Hz" for t, f in zip(times, freq)]
+        labels = [f"t = {t:.3f} s, mode {mode}: {f:.2f} Hz" for t, f in zip(times, freq)]
     timeline = {"times": (frame_of[keep] / fps).tolist(),
                 "labels": [labels[i] for i in np.flatnonzero(keep)]}
     legend = {"label": f"mode {mode} frequency [Hz]", "low": low, "high": high,
@@ -236,7 +236,7 @@ def assignment_preview_html(model: FlexibleModel, traj, result, path: str | Path
     before = np.asarray(result.freq_before_hz)[:, 0]
     target = np.asarray(result.targets_hz)[0]
     labels = [
-        f"t = {t:.3f} s · mode {mode}: {fa:.2f} Hz (target {ft:.2f} Hz; before assignment "
+        f"t = {t:.3f} s, mode {mode}: {fa:.2f} Hz (target {ft:.2f} Hz; before assignment "
         f"{fb:.2f} Hz)"
         for t, fa, fb, ft in zip(traj.times_s, after, before, target)
     ]

@@ -1,0 +1,173 @@
+"""Previews opened in headless Chromium: the robot is on screen and the animation moves it.
+
+The static HTML is loaded from a file with the network blocked (an unreachable proxy and no
+name resolution), so a page that needed anything online would render empty. ``#t=SECONDS``
+pauses the animation at that time (see :mod:`pinflex.visualization.offline`), which makes the
+screenshots deterministic; one pair of screenshots also lets the animation play on its own.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+pytest.importorskip("meshcat", reason="previews need meshcat (pip install meshcat)")
+Image = pytest.importorskip("PIL.Image", reason="reading screenshots needs Pillow")
+
+from pinflex.visualization import centrelines, mode_preview, prbdm_preview  # noqa: E402
+
+BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
+WIDTH, HEIGHT = 800, 600
+CAPTION_ROWS = 60  # bottom rows hold the caption
+Q0 = np.array([1.817, 5.312])
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Path of a Chromium executable, or skip."""
+    for name in BROWSERS:
+        path = shutil.which(name)
+        if path:
+            return path
+    pytest.skip("no Chromium found: install it with `apt-get install -y chromium` "
+                "(.ci/run does so when it can)")
+
+
+def screenshots(browser, tmp_path, html, fragments, budget_ms=(1000,)):
+    """Render ``html`` once per URL fragment (in parallel) and return RGB arrays."""
+    procs, outs = [], []
+    budgets = list(budget_ms) * len(fragments) if len(budget_ms) == 1 else list(budget_ms)
+    for i, (frag, budget) in enumerate(zip(fragments, budgets)):
+        out = tmp_path / f"shot{i}.png"
+        cmd = [
+            browser, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+            "--disable-quic", "--no-first-run", "--disable-background-networking",
+            "--disable-component-update", "--disable-sync", "--hide-scrollbars",
+            "--proxy-server=http://127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND",
+            f"--user-data-dir={tmp_path / f'profile{i}'}", f"--window-size={WIDTH},{HEIGHT}",
+            f"--virtual-time-budget={budget}", f"--screenshot={out}",
+            f"{html.as_uri()}#{frag}",
+        ]
+        procs.append(subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE))
+        outs.append(out)
+    images = []
+    for proc, out in zip(procs, outs):
+        _, err = proc.communicate(timeout=120)
+        assert out.is_file(), f"Chromium wrote no screenshot: {err.decode()[-2000:]}"
+        images.append(np.asarray(Image.open(out).convert("RGB")).astype(int))
+    return images
+
+
+def foreground(img: np.ndarray) -> np.ndarray:
+    """Pixels that differ from the white background."""
+    return np.abs(img - 255).sum(axis=2) > 30
+
+
+def orange(img: np.ndarray) -> np.ndarray:
+    """Pixels of the beams' orange (shaded)."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (r > 150) & (r - b > 90) & (g > 0.25 * r) & (g < 0.75 * r)
+
+
+def near(mask: np.ndarray, pixel, radius: int = 2) -> bool:
+    """Whether ``mask`` is set within ``radius`` pixels of (column, row)."""
+    c, r = int(round(pixel[0])), int(round(pixel[1]))
+    return bool(mask[max(r - radius, 0): r + radius + 1, max(c - radius, 0): c + radius + 1].any())
+
+
+def test_mode_preview_shows_the_arm_and_its_oscillation(browser, two_link_planar, tmp_path):
+    """Benchmark A mode 1: beam pixels lie on the projected deformed centreline at both peaks.
+
+    The two peaks differ where the beam swings.
+    """
+    preview = mode_preview(two_link_planar, Q0, 1, amplitude_m=0.06)
+    html = preview.write_html(tmp_path / "mode.html")
+    shots = screenshots(browser, tmp_path, html, ["t=0.5&gui=0", "t=1.5&gui=0"])
+    result = two_link_planar.modes(Q0, n_modes=1)
+    lines = centrelines(two_link_planar, result, 1)
+    scale = preview.info["scale"]
+    visible = slice(0, HEIGHT - CAPTION_ROWS)
+    for img, s in zip(shots, (scale, -scale)):
+        fg = foreground(img)
+        assert 2000 < fg[visible].sum() < 0.25 * WIDTH * HEIGHT
+        beam = orange(img)
+        for c in lines.values():
+            px = preview.camera.project(c.at(s), WIDTH, HEIGHT)
+            assert np.all(px[:, 1] < HEIGHT - CAPTION_ROWS)
+            # the beam's ends hide under joint and mass spheres; the rest is orange
+            missing = [p for p in px[1:-1] if not near(beam, p)]
+            assert not missing, f"no beam pixels at {np.round(missing)}"
+            assert near(fg, px[0]) and near(fg, px[-1])
+        # nothing is drawn far from the robot
+        rows, cols = np.nonzero(fg[visible])
+        box = preview.camera.project(np.vstack([c.at(s) for c in lines.values()]), WIDTH, HEIGHT)
+        assert cols.min() > box[:, 0].min() - 40 and cols.max() < box[:, 0].max() + 40
+        assert rows.min() > box[:, 1].min() - 40
+    a, b = shots
+    changed = np.abs(a - b).sum(axis=2) > 60
+    assert changed[visible].sum() > 1500
+    # where the first link swings most, the beam is on one side at one peak only
+    c = lines["link1"]
+    k = int(np.argmax(np.linalg.norm(c.displacement_m, axis=1)))
+    pa = preview.camera.project(c.at(scale)[k], WIDTH, HEIGHT)[0]
+    pb = preview.camera.project(c.at(-scale)[k], WIDTH, HEIGHT)[0]
+    assert np.linalg.norm(pa - pb) > 15
+    assert near(orange(a), pa) and not near(orange(b), pa, radius=1)
+    assert near(orange(b), pb) and not near(orange(a), pb, radius=1)
+
+
+def test_trajectory_playback_runs_by_itself(browser, two_link_planar, tmp_path):
+    """Benchmark A playback: colours follow the frequency (yellow high, purple low).
+
+    Without a ``#t=`` fragment the animation advances on its own with the browser's clock.
+    """
+    from pinflex.config import user_trajectory
+    from pinflex.visualization import trajectory_preview
+
+    traj = user_trajectory(two_link_planar, "benchmark_a")
+    preview = trajectory_preview(two_link_planar, traj.times_s, traj.q)
+    html = preview.write_html(tmp_path / "traj.html")
+    f = preview.info["freq_hz"]
+    hi, lo = int(np.argmax(f)), int(np.argmin(f))
+    t_hi, t_lo = 4.0 * traj.times_s[hi], 4.0 * traj.times_s[lo]
+    shots = screenshots(browser, tmp_path, html,
+                        [f"t={t_hi:.4f}&gui=0", f"t={t_lo:.4f}&gui=0", "gui=0", "gui=0"],
+                        budget_ms=(1000, 1000, 1500, 4000))
+    from pinflex.visualization.robot import pose_state
+
+    for img, k, yellow in ((shots[0], hi, True), (shots[1], lo, False)):
+        st = pose_state(two_link_planar, traj.q[k], 1)
+        mid = 0.5 * (st.beams["link1"][0] + st.beams["link1"][-1])
+        c, r = np.round(preview.camera.project(mid, WIDTH, HEIGHT)[0]).astype(int)
+        patch = img[r - 1: r + 2, c - 1: c + 2].reshape(-1, 3).mean(axis=0)
+        if yellow:
+            assert patch[0] > 150 and patch[1] > 150 and patch[2] < 100, patch
+        else:  # viridis' dark purple end
+            assert patch.max() < 130 and patch[1] < 40 and patch[2] > patch[0], patch
+    changed = np.abs(shots[2] - shots[3]).sum(axis=2) > 60
+    assert changed[: HEIGHT - CAPTION_ROWS].sum() > 1000
+
+
+def test_prbdm_preview_shows_the_chain_over_its_beam(browser, tmp_path):
+    """A 4R chain over a random beam: drawn in the framed region, and it moves."""
+    from pinflex.prbdm.beams import random_beam
+    from pinflex.prbdm.chain import build_chain
+    from pinflex.visualization.prbdm import chain_frames
+
+    beam = random_beam(3)
+    chain = build_chain(beam, np.array([0.1, 0.3, 0.3, 0.2, 0.1]), np.array([4e4, 3e4, 2e4, 1e4]))
+    preview = prbdm_preview(beam, chain, amplitude_m=0.15)
+    html = preview.write_html(tmp_path / "prbdm.html")
+    shots = screenshots(browser, tmp_path, html, ["t=0.5&gui=0", "t=1.5&gui=0"])
+    s = preview.info["scale"]
+    for img, sign in zip(shots, (1.0, -1.0)):
+        fg = foreground(img)
+        joints = [F.translation for F in chain_frames(chain, sign * s * preview.info["shape"])]
+        for p in preview.camera.project(np.array(joints), WIDTH, HEIGHT):
+            assert near(fg, p, radius=3)
+        assert fg[: HEIGHT - CAPTION_ROWS].sum() > 5000
+    changed = np.abs(shots[0] - shots[1]).sum(axis=2) > 60
+    assert changed[: HEIGHT - CAPTION_ROWS].sum() > 1000
