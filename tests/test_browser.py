@@ -21,7 +21,7 @@ from pinflex.visualization import centrelines, mode_preview, prbdm_preview  # no
 
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 WIDTH, HEIGHT = 800, 600
-CAPTION_ROWS = 60  # bottom rows hold the caption
+CAPTION_ROWS = 55  # bottom rows hold the caption
 Q0 = np.array([1.817, 5.312])
 
 

@@ -101,7 +101,7 @@ class RobotDrawing:
         self.rest = pose_state(model, self.q, self.spe)
         self.size_m = characteristic_length(self.rest)
         radii = [shapes.beam_radius_m(model, link) for link in model._flex]
-        self.joint_radius_m = max(1.6 * max(radii, default=0.0), 0.015 * self.size_m)
+        self.joint_radius_m = max(1.25 * max(radii, default=0.0), 0.015 * self.size_m)
         self.beam_radius_m = {
             link: max(r, 0.4 * self.joint_radius_m) for link, r in zip(model._flex, radii)
         }

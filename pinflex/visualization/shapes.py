@@ -217,22 +217,36 @@ class CameraView:
 
 
 def frame_points(points_m: np.ndarray, direction: np.ndarray, *, fov_deg: float = 75.0,
-                 margin: float = 1.15) -> CameraView:
+                 aspect: float = 4.0 / 3.0, fill: float = 0.75) -> CameraView:
     """A view from ``direction`` (world, towards the camera) that fits all points.
+
+    The camera looks at the centre of the points' bounding box from the nearest distance at
+    which every point projects inside ``fill`` times the half-width and half-height of an
+    image of the given aspect ratio.
 
     Args:
         points_m: Points to keep in view, (n, 3) [m].
         direction: Direction from the scene centre to the camera (world axes).
         fov_deg: Vertical field of view [deg].
-        margin: Distance factor above the tightest fit.
+        aspect: Image width over height (wider images only add margin at the sides).
+        fill: Fraction of the half-image the points may use, in (0, 1].
     """
     pts = np.atleast_2d(points_m)
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    centre = 0.5 * (lo + hi)
-    radius = max(float(np.max(np.linalg.norm(pts - centre, axis=1))), 1e-3)
+    centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
     d = np.asarray(direction, dtype=float)
     d /= np.linalg.norm(d)
-    distance = margin * radius / np.sin(np.radians(fov_deg) / 2.0)
+    right = np.cross(-d, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, -d)
+    rel = pts - centre
+    tan_v = fill * np.tan(np.radians(fov_deg) / 2.0)
+    tan_h = tan_v * aspect
+    size = max(float(np.max(np.linalg.norm(rel, axis=1))), 1e-3)
+    distance = max(
+        float(np.max(rel @ d + np.abs(rel @ right) / tan_h)),
+        float(np.max(rel @ d + np.abs(rel @ up) / tan_v)),
+        1.5 * size,
+    )
     return CameraView(centre, distance * d, fov_deg)
 
 
