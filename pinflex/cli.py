@@ -91,9 +91,12 @@ def _optional_commands(sub) -> None:
     import importlib
     import importlib.util
 
-    from pinflex import assign_cli
+    from pinflex import assign_cli, view_cli
+    from pinflex.batch import cli as batch_cli
 
     assign_cli.add_parser(sub)
+    view_cli.add_parser(sub)
+    batch_cli.add_parser(sub)
     # the PRBDM command registers itself when its module is present
     if importlib.util.find_spec("pinflex.prbdm.cli") is not None:
         importlib.import_module("pinflex.prbdm.cli").add_parser(sub)
