@@ -107,6 +107,35 @@ def test_peak_drawn_displacement_equals_the_amplitude(two_link_planar):
     assert s * peak == pytest.approx(0.04, rel=1e-14)
 
 
+def test_bad_preview_requests_raise_named_errors(two_link_planar):
+    """Mode 0, a mode past the elastic dofs and a zero amplitude are refused with the range."""
+    from pinflex.exceptions import ConfigurationError
+
+    with pytest.raises(ConfigurationError, match=r"modes 1\.\.21"):
+        mode_preview(two_link_planar, Q0, 0)
+    with pytest.raises(ConfigurationError, match=r"modes 1\.\.21"):
+        mode_preview(two_link_planar, Q0, 22)
+    with pytest.raises(ConfigurationError, match="positive length"):
+        mode_preview(two_link_planar, Q0, 1, amplitude_m=0.0)
+
+
+def test_missing_mesh_falls_back_to_simple_shapes():
+    """A URDF whose mesh cannot be found previews with simple shapes and a named warning."""
+    from pinflex.exceptions import PinflexWarning
+
+    xml = single_link_urdf().replace(
+        '<link name="base"/>',
+        '<link name="base"><visual><geometry><mesh filename="package://nowhere/base.stl"/>'
+        "</geometry></visual></link>",
+    )
+    model = FlexibleModel(parse(xml))
+    with pytest.warns(PinflexWarning, match="nowhere/base.stl"):
+        p = mode_preview(model, [0.3], 1, frames=4)
+    nodes = p.viewer.window.tree["meshcat"]["pinflex"]
+    assert sorted(nodes) == ["beams", "joints", "markers"]
+    assert "base" in nodes["markers"] and len(nodes["beams"]["bar"]) == 40 * 8
+
+
 def test_hermite_drawing_is_closer_to_a_fine_mesh_than_straight_segments():
     """A 2-element cantilever drawn with shape functions is 50x closer to a 32-element mode."""
     def drawn(elements, stations):

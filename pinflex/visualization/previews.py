@@ -107,6 +107,10 @@ def mode_preview(
         mode) and ``amplitude_m``.
     """
     q = np.zeros(model.nv) if q is None else model.check_q(q)
+    if int(mode) != mode or not 1 <= mode <= model.nx:
+        raise ConfigurationError(
+            f"mode {mode!r} does not exist: the model has elastic modes 1..{model.nx}"
+        )
     if int(frames) < 4:
         raise ConfigurationError(f"frames = {frames!r}: an oscillation needs at least 4 frames")
     result = model.modes(q, y, n_modes=int(mode))

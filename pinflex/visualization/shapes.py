@@ -158,7 +158,8 @@ def link_twists(model: FlexibleModel, q: np.ndarray, shapes: np.ndarray) -> dict
     out = {}
     for link in model.description.links:
         fid = model.model.getFrameId(link, pin.FrameType.BODY)
-        jac = pin.getFrameJacobian(model.model, data, fid, pin.LOCAL) @ model.coord_map
+        jac = pin.getFrameJacobian(model.model, data, fid, pin.LOCAL).reshape(6, -1)
+        jac = jac @ model.coord_map  # (6, nv); Pinocchio returns (6,) when nv = 1
         nu = jac @ shapes[nx:]
         root = roots.get(link)
         if root is not None:
