@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import re
 import subprocess
 import sys
@@ -270,20 +269,19 @@ def test_prbdm_preview_moves_links_along_a_chain_mode(tmp_path):
 
 def test_view_cli_writes_html(tmp_path, capsys):
     """``pinflex view URDF --q ... --mode 2 --html FILE`` writes the page and quotes mode 2."""
-    from pinflex import view_cli
+    from pinflex.cli import main
 
-    parser = argparse.ArgumentParser()
-    view_cli.add_parser(parser.add_subparsers())
     out = tmp_path / "v.html"
-    args = parser.parse_args(["view", str(TWO_LINK), "--planar", "--q", "1.817", "5.312",
-                              "--mode", "2", "--set", "m1=0.2", "--amplitude", "0.03",
-                              "--html", str(out)])
-    assert args.func(args) == 0
+    code = main(["view", str(TWO_LINK), "--planar", "--q", "1.817", "5.312", "--mode", "2",
+                 "--set", "m1=0.2", "--amplitude", "0.03", "--html", str(out)])
+    assert code == 0
     model = FlexibleModel(TWO_LINK, planar=True, values={"m1": 0.2})
     f2 = model.frequencies(Q0, n_modes=2)[1]
     printed = capsys.readouterr().out
     assert f"mode 2 at {f2:.2f} Hz" in printed and "30 mm" in printed
     assert out.is_file() and f"{f2:.2f} Hz" in out.read_text()
+    assert main(["view", str(TWO_LINK), "--planar", "--mode", "30", "--html", str(out)]) == 2
+    assert "modes 1..21" in capsys.readouterr().err
 
 
 def test_served_viewer_answers_over_http(two_link_planar):
