@@ -141,6 +141,8 @@ def prbdm_preview(
     """
     import meshcat.geometry as mg
 
+    from pinflex.prbdm.chain import tip_jacobian
+
     chain = as_chain(planform, chain)
     n = chain.n_joints
     theta0 = np.zeros(n) if theta is None else np.asarray(theta, dtype=float).reshape(-1)
@@ -151,15 +153,14 @@ def prbdm_preview(
     if not np.isfinite(amplitude_m) or amplitude_m <= 0.0:
         raise ConfigurationError(f"amplitude = {amplitude_m!r} must be a positive length [m]")
     freq, shape = chain_mode(chain, theta0, mode)
-    tip0 = tip_positions(chain, theta0)
-    probe = 1e-6
-    slope = np.linalg.norm(tip_positions(chain, theta0 + probe * shape) - tip0) / probe
+    # tip displacement per unit modal coordinate, from the tip Jacobian
+    slope = float(np.linalg.norm(tip_jacobian(chain, theta0) @ shape))
     scale = amplitude_m / max(slope, 1e-12)
     scales = scale * np.sin(2.0 * np.pi * np.arange(int(frames) + 1) / int(frames))
     half = float(planform.half_width_m.max())
-    pts = [[0.0, -half, 0.0], [length, half, 0.0]]
-    pts += [tip_positions(chain, theta0 + s * shape) for s in (-scale, scale)]
-    view = shapes.frame_points(np.array(pts), np.array([0.25, -1.0, 0.4]))
+    corners = np.array([[0.0, -half, 0.0], [length, half, 0.0]])
+    tips = np.array([tip_positions(chain, theta0 + s * shape) for s in (-scale, scale)])
+    view = shapes.frame_points(np.vstack([corners, tips]), np.array([0.25, -1.0, 0.4]))
     vis = offline_visualizer() if viewer is None else viewer
     writer = SceneWriter(vis, view, int(frames) / float(period_s))
     ghost = mg.MeshPhongMaterial(color=rgb_int(GHOST_RGBA[:3]), opacity=GHOST_RGBA[3],

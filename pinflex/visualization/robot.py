@@ -125,7 +125,7 @@ class RobotDrawing:
         model, writer, rest = self.model, self.writer, self.rest
         with_visual = set()
         if self.visual_model is not None and self.visual_model.ngeoms:
-            with_visual = self._load_visuals()
+            with_visual = self._load_visuals(self.visual_model)
         joint_mat = mg.MeshPhongMaterial(color=JOINT_COLOUR)
         link_mat = mg.MeshPhongMaterial(color=LINK_COLOUR)
         desc = model.description
@@ -174,7 +174,7 @@ class RobotDrawing:
                        translation(self.mass_position(rest, pm.link, pm.xyz)))
             self._masses.append((path, pm.link, pm.xyz))
 
-    def _load_visuals(self) -> set[str]:
+    def _load_visuals(self, visual_model: pin.GeometryModel) -> set[str]:
         """Put the URDF visuals in the scene; returns the links that have some.
 
         Rigid links go through Pinocchio's ``MeshcatVisualizer``; visuals of flexible links are
@@ -190,7 +190,7 @@ class RobotDrawing:
         rigid = pin.GeometryModel()
         ghosts = []
         links = set()
-        for g in self.visual_model.geometryObjects:
+        for g in visual_model.geometryObjects:
             link = frames[g.parentFrame].name
             links.add(link)
             if link in model._flex:

@@ -131,7 +131,7 @@ def describe_window(vis: Any, *, title: str, caption: str, timeline=None, legend
     Ignored for a served viewer (meshcat's page has no caption).
     """
     window = getattr(vis, "window", None)
-    if hasattr(window, "caption"):
+    if window is not None and hasattr(window, "caption"):
         window.title = title
         window.caption = caption
         window.timeline = timeline
