@@ -21,6 +21,7 @@ width below the paper's 1 m panel limit.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -86,6 +87,22 @@ class Planform:
         _validate_planform(x, y, self.thickness_m)
         object.__setattr__(self, "x_m", _readonly(x))
         object.__setattr__(self, "half_width_m", _readonly(y))
+
+    @cached_property
+    def _cumulative_integrals(self) -> np.ndarray:
+        """Integrals from 0 to each vertex of (w, w x, w x^2, w^3, 1/I), shape (p + 2, 5)."""
+        a, b = self.x_m[:-1, None], self.x_m[1:, None]
+        q = 0.5 * (a + b) + 0.5 * (b - a) * _GAUSS3_X
+        w = self.width_m(q)
+        gw = 0.5 * (b - a) * _GAUSS3_W
+        moments = self.area_moment_m4(self.x_m)
+        pieces = np.column_stack([
+            (gw * w).sum(1), (gw * w * q).sum(1), (gw * w * q * q).sum(1), (gw * w**3).sum(1),
+            np.diff(self.x_m) * _log_mean_inverse(moments[:-1], moments[1:]),
+        ])
+        table = np.vstack([np.zeros((1, 5)), np.cumsum(pieces, axis=0)])
+        table.setflags(write=False)
+        return table
 
     @property
     def length_m(self) -> float:
@@ -224,11 +241,6 @@ class SegmentProperties:
     compliance_1_n_m: float
 
 
-def _pieces(planform: Planform, start_m: float, end_m: float) -> np.ndarray:
-    inner = planform.x_m[(planform.x_m > start_m) & (planform.x_m < end_m)]
-    return np.concatenate([[start_m], inner, [end_m]])
-
-
 def _log_mean_inverse(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Mean of 1/v over a segment where v varies linearly from a to b."""
     ratio = b / a
@@ -240,11 +252,72 @@ def _log_mean_inverse(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(close, series, exact)
 
 
-def segment_properties(planform: Planform, start_m: float, end_m: float) -> SegmentProperties:
-    """Mass, centre of mass, rotational inertia and bending compliance of a beam segment.
+def _partial_integrals(planform: Planform, s_m: np.ndarray) -> np.ndarray:
+    """Integrals from 0 to each s of (w, w x, w x^2, w^3, 1/I), shape (len(s), 5).
 
-    Integrals are exact: the width is linear between vertices and a 3-point Gauss rule
-    integrates polynomials up to degree 5 on every piece.
+    Whole planform pieces come from a cumulative table; the last partial piece is integrated
+    exactly (3-point Gauss for the polynomials, the logarithmic mean for 1/I).
+    """
+    x = planform.x_m
+    piece = np.clip(np.searchsorted(x, s_m, side="right") - 1, 0, x.size - 2)
+    table = planform._cumulative_integrals
+    left = x[piece]
+    span = s_m - left
+    q = left[:, None] + 0.5 * span[:, None] * (_GAUSS3_X + 1.0)
+    w = planform.width_m(q)
+    gw = 0.5 * span[:, None] * _GAUSS3_W
+    i_left, i_right = planform.area_moment_m4(left), planform.area_moment_m4(s_m)
+    partial = np.column_stack([
+        (gw * w).sum(1), (gw * w * q).sum(1), (gw * w * q * q).sum(1), (gw * w**3).sum(1),
+        span * _log_mean_inverse(i_left, i_right),
+    ])
+    return table[piece] + partial
+
+
+def chain_segments(planform: Planform, bounds_m: np.ndarray) -> list[SegmentProperties]:
+    """Properties of consecutive segments [b0, b1], [b1, b2], ... in one vectorised pass.
+
+    Integrals are exact: the width is linear between vertices, so the mass moments are
+    piecewise polynomials (3-point Gauss on each piece) and the compliance uses the exact
+    logarithmic mean of 1/I; segment values are differences of cumulative integrals.
+
+    Args:
+        planform: The beam.
+        bounds_m: Increasing segment boundaries inside [0, L], shape (k + 1,) [m].
+
+    Returns:
+        One :class:`SegmentProperties` per segment.
+
+    Raises:
+        InvalidBeam: If the boundaries are not increasing or leave the beam.
+    """
+    bounds = np.asarray(bounds_m, dtype=float)
+    length = planform.length_m
+    if bounds.ndim != 1 or bounds.size < 2 or np.any(np.diff(bounds) <= 0.0) \
+            or bounds[0] < 0.0 or bounds[-1] > length * (1.0 + 1e-12):
+        raise InvalidBeam(f"segment bounds {np.round(bounds, 9).tolist()} must increase "
+                          f"strictly inside [0, L = {length:g}] m")
+    bounds = np.minimum(bounds, length)
+    m0, m1, m2, w3, inv_i = np.diff(_partial_integrals(planform, bounds), axis=0).T
+    t = planform.thickness_m
+    rho_t = planform.material.density_kg_m3 * t
+    mass = rho_t * m0
+    com = m1 / m0
+    bending = rho_t * (m2 - com * m1)
+    ixx = rho_t * (w3 + t**2 * m0) / 12.0
+    iyy = bending + mass * t**2 / 12.0
+    izz = bending + rho_t * w3 / 12.0
+    seg_len = np.diff(bounds)
+    mean_i = m0 * t**3 / 12.0 / seg_len
+    comp = inv_i / planform.material.youngs_modulus_pa
+    return [SegmentProperties(float(bounds[k]), float(bounds[k + 1]), float(mass[k]),
+                              float(com[k]), (float(ixx[k]), float(iyy[k]), float(izz[k])),
+                              float(mean_i[k]), float(comp[k]))
+            for k in range(seg_len.size)]
+
+
+def segment_properties(planform: Planform, start_m: float, end_m: float) -> SegmentProperties:
+    """Mass, centre of mass, rotational inertia and bending compliance of one beam segment.
 
     Args:
         planform: The beam.
@@ -252,40 +325,12 @@ def segment_properties(planform: Planform, start_m: float, end_m: float) -> Segm
         end_m: Segment end [m], end <= L.
 
     Returns:
-        The segment's properties.
+        The segment's properties (see :func:`chain_segments`).
 
     Raises:
         InvalidBeam: If the segment is empty or leaves the beam.
     """
-    length = planform.length_m
-    if not (0.0 <= start_m < end_m <= length * (1.0 + 1e-12)):
-        raise InvalidBeam(
-            f"segment [{start_m:g}, {end_m:g}] m must satisfy 0 <= start < end <= L = {length:g} m"
-        )
-    end_m = min(end_m, length)
-    nodes = _pieces(planform, start_m, end_m)
-    a, b = nodes[:-1, None], nodes[1:, None]
-    s = 0.5 * (a + b) + 0.5 * (b - a) * _GAUSS3_X
-    weights = 0.5 * (b - a) * _GAUSS3_W
-    width = planform.width_m(s)
-    t = planform.thickness_m
-    rho = planform.material.density_kg_m3
-    dm = rho * t * width * weights
-    mass = float(dm.sum())
-    com = float((dm * s).sum() / mass)
-    ixx = float((dm * (width**2 + t**2) / 12.0).sum())
-    iyy = float((dm * ((s - com) ** 2 + t**2 / 12.0)).sum())
-    izz = float((dm * ((s - com) ** 2 + width**2 / 12.0)).sum())
-    inertia_ends = planform.area_moment_m4(nodes)
-    piece_lengths = np.diff(nodes)
-    mean_i = float(np.sum(piece_lengths * 0.5 * (inertia_ends[:-1] + inertia_ends[1:])))
-    inv_mean = _log_mean_inverse(inertia_ends[:-1], inertia_ends[1:])
-    compliance = float(np.sum(piece_lengths * inv_mean)) / planform.material.youngs_modulus_pa
-    return SegmentProperties(
-        start_m=float(start_m), end_m=float(end_m), mass_kg=mass, com_m=com,
-        inertia_com_kg_m2=(ixx, iyy, izz), mean_area_moment_m4=mean_i / (end_m - start_m),
-        compliance_1_n_m=compliance,
-    )
+    return chain_segments(planform, np.array([start_m, end_m]))[0]
 
 
 def equivalent_bending_stiffness(planform: Planform) -> float:

@@ -24,7 +24,7 @@ import pinocchio as pin
 import scipy.linalg as sla
 
 from ..exceptions import ConfigurationError, InvalidChain, NewtonDivergence
-from .beams import Planform, segment_properties
+from .beams import Planform, chain_segments
 
 
 @dataclass(frozen=True)
@@ -121,8 +121,8 @@ def build_chain(planform: Planform, gamma: np.ndarray, stiffness_nm_rad: np.ndar
     parent = 0
     placement = pin.SE3(np.eye(3), np.array([lengths[0], 0.0, 0.0]))
     masses = []
-    for j in range(1, g.size):
-        seg = segment_properties(planform, starts[j], starts[j] + lengths[j])
+    segments = chain_segments(planform, np.concatenate([starts[1:], [planform.length_m]]))
+    for j, seg in enumerate(segments, start=1):
         joint = model.addJoint(parent, pin.JointModelRY(), placement, f"joint_{j}")
         inertia = pin.Inertia(seg.mass_kg, np.array([seg.com_m - starts[j], 0.0, 0.0]),
                               np.diag(seg.inertia_com_kg_m2))
@@ -176,7 +176,7 @@ def tip_jacobian(chain: PrbdmChain, theta: np.ndarray | None = None,
     """Jacobian of the tip position (x, z) with respect to theta, shape (2, n) [m/rad]."""
     data = chain.model.createData() if data is None else data
     jac = pin.computeFrameJacobian(chain.model, data, _pose(chain, theta), chain.tip_frame_id,
-                                   pin.LOCAL_WORLD_ALIGNED)
+                                   pin.LOCAL_WORLD_ALIGNED).reshape(6, -1)
     return jac[[0, 2], :].copy()
 
 
@@ -211,17 +211,19 @@ class StaticsResult:
 def _statics_terms(chain: PrbdmChain, data: pin.Data, theta: np.ndarray, force: np.ndarray):
     """Residual, tangent stiffness and tip position at theta."""
     jac = pin.computeFrameJacobian(chain.model, data, theta, chain.tip_frame_id,
-                                   pin.LOCAL_WORLD_ALIGNED)
+                                   pin.LOCAL_WORLD_ALIGNED).reshape(6, -1)
     tip = data.oMf[chain.tip_frame_id].translation
-    force3 = np.array([force[0], 0.0, force[1]])
-    joints = np.array([data.oMi[j].translation for j in range(1, chain.n_joints + 1)])
-    # For parallel revolute axes, d(J_j)/d(theta_i) = -(p - o_max(i,j)) (planar chain).
-    arm_work = (tip - joints) @ force3
-    idx = np.arange(chain.n_joints)
-    hessian = -arm_work[np.maximum(idx[:, None], idx[None, :])]
-    residual = chain.stiffness_nm_rad * theta - jac[:3].T @ force3
-    tangent = chain.stiffness_matrix - hessian
-    return residual, tangent, tip[[0, 2]].copy()
+    # Joint axes are all +Y, so column j is y x (p - o_j) = ((p - o_j)_z, 0, -(p - o_j)_x) and
+    # d(J_j)/d(theta_i) = -(p - o_max(i,j)): the tangent needs only the Jacobian itself.
+    jx, jz = jac[0], jac[2]
+    generalized = jx * force[0] + jz * force[1]
+    arm_work = jx * force[1] - jz * force[0]
+    n = theta.size
+    idx = np.arange(n)
+    tangent = arm_work[np.maximum.outer(idx, idx)]
+    tangent[idx, idx] += chain.stiffness_nm_rad
+    residual = chain.stiffness_nm_rad * theta - generalized
+    return residual, tangent, np.array([tip[0], tip[2]])
 
 
 def solve_tip_statics(chain: PrbdmChain, force_n: np.ndarray, theta0: np.ndarray | None = None,

@@ -1,0 +1,153 @@
+"""Modal analysis of an ERLS model: reduced eigenproblem, mode shapes, nodal motion."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pinflex.erls.terms import BatchAlgebra
+from pinflex.exceptions import ConfigurationError, EigenSolverError
+from pinflex.kinematics import rotate_twist
+
+
+@dataclass(frozen=True)
+class ModalResult:
+    """Modal analysis at one pose.
+
+    Attributes:
+        q: Joint coordinates (user convention) [rad or m], (nv,).
+        y: Design values [kg], (ny,).
+        ndof: Number of generalized coordinates nx + nv.
+        rigid_modes: Number of rigid (zero-frequency) modes.
+        eigvals: Non-rigid eigenvalues λ = ω² ascending [rad²/s²], (k,).
+        shapes: Mass-normalised mode shapes over ``[x; q]``, (ndof, k).
+        node_positions: World positions of beam nodes per flexible link [m], (N+1, 3) each.
+        node_motion: Per flexible link, the world-axes nodal translation and rotation of each
+            mode, (k, N+1, 6); ``node_elastic`` the elastic part only (rigid ERLS motion removed).
+    """
+
+    q: np.ndarray
+    y: np.ndarray
+    ndof: int
+    rigid_modes: int
+    eigvals: np.ndarray
+    shapes: np.ndarray
+    node_positions: dict[str, np.ndarray]
+    node_motion: dict[str, np.ndarray]
+    node_elastic: dict[str, np.ndarray]
+
+    @property
+    def omega_rad_s(self) -> np.ndarray:
+        """Angular eigenfrequencies [rad/s]."""
+        return np.sqrt(self.eigvals)
+
+    @property
+    def freq_hz(self) -> np.ndarray:
+        """Eigenfrequencies [Hz] of the non-rigid modes, ascending."""
+        return np.sqrt(self.eigvals) / (2.0 * np.pi)
+
+
+def reduced(model, M: np.ndarray, K: np.ndarray):
+    """Elastic mass with the rigid coordinates condensed out, and Kxx."""
+    nx = model.nx
+    Mxx, Mxq, Mqq = M[..., :nx, :nx], M[..., :nx, nx:], M[..., nx:, nx:]
+    if model.nv:
+        try:
+            Lq = np.linalg.cholesky(Mqq)
+        except np.linalg.LinAlgError as exc:
+            raise EigenSolverError(
+                "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
+                "add inertia to the links it drives"
+            ) from exc
+        Z = np.linalg.inv(Lq) @ np.swapaxes(Mxq, -1, -2)
+        Mred = Mxx - np.swapaxes(Z, -1, -2) @ Z
+    else:
+        Mred = Mxx
+    return Mred, K[..., :nx, :nx]
+
+
+def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
+    """Non-rigid eigenfrequencies [Hz] at one or many poses, ascending.
+
+    Batched: all poses are assembled and solved together.
+
+    Returns:
+        (k,) for one pose or (n, k).
+    """
+    M, K = model.matrices(Q, y, check_bounds=check_bounds)
+    lam = model.eigvals_from(M, K)
+    if n_modes is not None:
+        lam = lam[..., :n_modes]
+    return np.sqrt(lam) / (2.0 * np.pi)
+
+
+def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof)."""
+    if model.nx == 0:
+        return np.zeros(M.shape[:-2] + (0,))
+    Mred, Kxx = reduced(model, M, K)
+    try:
+        L = np.linalg.cholesky(Mred)
+    except np.linalg.LinAlgError as exc:
+        raise EigenSolverError("the reduced elastic mass matrix is not positive") from exc
+    Li = np.linalg.inv(L)
+    A = Li @ Kxx @ np.swapaxes(Li, -1, -2)
+    lam = np.linalg.eigvalsh(A)
+    if np.any(lam <= 0.0):
+        raise EigenSolverError(
+            "a non-positive elastic eigenvalue appeared: the structure is not restrained "
+            "(check that every flexible link is attached to the ground through joints)"
+        )
+    return lam
+
+
+def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) -> ModalResult:
+    """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose."""
+    import scipy.linalg
+
+    q = model.check_q(q)
+    if q.ndim != 1:
+        raise ConfigurationError("modes() takes one pose; use frequencies() for many")
+    y = model.check_y(y, bounds=check_bounds)
+    M, K = model.matrices(q, y, check_bounds=check_bounds)
+    nx = model.nx
+    Mred, Kxx = reduced(model, M, K)
+    k = nx if n_modes is None else min(int(n_modes), nx)
+    lam, phix = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[0, k - 1] if k else None)
+    if model.nv:
+        phiq = -np.linalg.solve(M[nx:, nx:], M[nx:, :nx] @ phix)
+    else:
+        phiq = np.zeros((0, k))
+    shapes = np.vstack([phix, phiq])
+    # sign: largest elastic component positive
+    idx = np.argmax(np.abs(phix), axis=0)
+    shapes *= np.sign(phix[idx, np.arange(k)])[None, :]
+    positions, motion, elastic = node_fields(model, q, shapes)
+    return ModalResult(
+        q=q, y=y, ndof=model.ndof, rigid_modes=model.nv, eigvals=lam, shapes=shapes,
+        node_positions=positions, node_motion=motion, node_elastic=elastic,
+    )
+
+
+def node_fields(model, q: np.ndarray, shapes: np.ndarray):
+    """World node positions, total and elastic nodal motion of mode shapes at pose q."""
+    terms = model.pose_terms(q[None])
+    twist = model._root_twists(terms, BatchAlgebra(1))
+    pin.framesForwardKinematics(model.model, model.data, model.pin_configuration(q))
+    positions, motion, elastic = {}, {}, {}
+    nx = model.nx
+    for link, plan in model._flex.items():
+        oMf = model.data.oMf[model._frame_id[link]]
+        e = twist[link]
+        bx = plan.sel if e is None else plan.sel + plan.root @ e[0]
+        jn = plan.jac @ terms.jac[link][0]
+        Rw = rotate_twist(oMf.rotation @ plan.spec.rotation)
+        n1 = plan.nodes.shape[0]
+        el = (bx @ shapes[:nx]).T.reshape(-1, n1, 6)
+        tot = el + (jn @ shapes[nx:]).T.reshape(-1, n1, 6)
+        positions[link] = plan.nodes @ oMf.rotation.T + oMf.translation
+        motion[link] = np.einsum("ij,knj->kni", Rw, tot)
+        elastic[link] = np.einsum("ij,knj->kni", Rw, el)
+    return positions, motion, elastic

@@ -1,0 +1,347 @@
+"""ERLS (equivalent rigid-link system) model of a flexible-link arm on Pinocchio.
+
+Generalized coordinates are ``[x; q]``: ``x`` the independent elastic nodal coordinates of
+all flexible links, ``q`` the ERLS joint coordinates (one value per moving joint, in the
+model's user convention, see :class:`FlexibleModel`). With ``q̇ = 0`` the modal problem is
+``K(q, y) φ = λ M(q, y) φ`` with ``K = blkdiag(Kₓₓ, 0)``.
+
+Formulation (equivalent to the world-axes form of paper 000 eq. 1 by an orthogonal change of
+elastic coordinates at each pose, hence the same eigenvalues):
+
+* The elastic dofs of a beam node are a small translation and rotation in the *beam* axes of
+  its link. Nodes 1..N of every flexible link are independent. Node 0 (the root, at the link
+  origin) copies the elastic motion of the point it is attached to on the parent link, rotated
+  into the child frame by the joint, **minus the joint's motion subspace** (a revolute joint's
+  rotation about its axis, a prismatic joint's translation along it): this is the unique-ERLS
+  rule. The root link of the URDF is clamped to the ground.
+* A point on a flexible link moves with the beam's shape functions at its axial station plus a
+  rigid offset; a rigid link moves rigidly with the elastic motion of its root. A prismatic
+  joint's guide is attached at the joint origin.
+* The ERLS velocity of each node is Pinocchio's LOCAL frame Jacobian of the link, moved to the
+  node: ``S``. Kinetic energy uses the consistent beam mass, the URDF inertia of rigid links and
+  the point masses; strain energy the beam stiffness.
+
+Non-rigid eigenvalues are computed from the reduced problem
+``Kₓₓ φₓ = λ (Mₓₓ − Mₓq Mqq⁻¹ Mqx) φₓ``, which has exactly the non-zero eigenvalues of the full
+pair and no spurious near-zero ones; the ``nv`` rigid modes are counted, not computed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from pinflex.description import RobotDescription, load
+from pinflex.erls import modal, plan
+from pinflex.erls.terms import (
+    BatchAlgebra,
+    DesignVariable,
+    _Attachment,
+    _offset_block,
+    _PoseTerms,
+    _rot6,
+    _zeros_like,
+)
+from pinflex.exceptions import (
+    ConfigurationError,
+    DesignVariableNotFound,
+    DesignVariableOutOfBounds,
+    InvalidDescription,
+)
+from pinflex.kinematics import axis_rotation, translate_twist
+
+
+class FlexibleModel:
+    """A URDF arm whose annotated links are finite-element beams (ERLS).
+
+    Joint coordinates given by users are one value per moving joint in Pinocchio's velocity
+    order (``joint_names``). By default they are Pinocchio's own (relative) joint values; a
+    description with ``<pinflex:coordinates convention="absolute"/>`` uses absolute link
+    angles ``q_abs`` of a planar serial arm instead, with ``q_rel = C q_abs`` (``C`` has ones on
+    the diagonal and minus ones below it).
+
+    Args:
+        description: A parsed description or the path of an annotated URDF.
+        planar: Keep only in-plane elastic dofs (all revolute axes parallel to one normal,
+            beams normal to it).
+        values: Overrides of point-mass values ``{name: kg}`` (checked against bounds).
+        coordinates: 'relative' or 'absolute' to override the description's convention.
+    """
+
+    def __init__(
+        self,
+        description: RobotDescription | str | Path,
+        *,
+        planar: bool = False,
+        values: dict[str, float] | None = None,
+        coordinates: str | None = None,
+    ):
+        if not isinstance(description, RobotDescription):
+            description = load(description)
+        self.description = description
+        self.planar = bool(planar)
+        try:
+            self.model = pin.buildModelFromXML(description.urdf_xml)
+        except Exception as exc:  # Pinocchio raises plain RuntimeError/ValueError
+            raise InvalidDescription(f"Pinocchio could not load the URDF: {exc}") from exc
+        self.data = self.model.createData()
+        self.joint_names = tuple(self.model.names[1:])
+        self.nv = self.model.nv
+        if self.nv != len(self.joint_names):
+            raise InvalidDescription("only joints with one degree of freedom are supported")
+        absolute = description.absolute_coordinates if coordinates is None else (
+            coordinates == "absolute"
+        )
+        if coordinates not in (None, "relative", "absolute"):
+            raise ConfigurationError(
+                f"coordinates='{coordinates}': expected 'relative' or 'absolute'"
+            )
+        self.coordinates = "absolute" if absolute else "relative"
+        self.coord_map = plan.coordinate_map(self, absolute)
+        self._pm_values = {p.name: p.mass for p in description.point_masses}
+        self.design = tuple(
+            DesignVariable(p.name, p.lower, p.upper, p.mass)
+            for p in description.point_masses
+            if p.design
+        )
+        for name, value in (values or {}).items():
+            self.set_value(name, value)
+        plan.build_plan(self)
+
+    # ------------------------------------------------------------------ set-up
+    def set_value(self, name: str, value: float) -> None:
+        """Set the nominal value of a point mass [kg]."""
+        if name not in self._pm_values:
+            raise DesignVariableNotFound(name, self._pm_values)
+        value = float(value)
+        for i, d in enumerate(self.design):
+            if d.name == name:
+                if not d.lower <= value <= d.upper:
+                    raise DesignVariableOutOfBounds(name, value, d.lower, d.upper)
+                self.design = (
+                    self.design[:i]
+                    + (DesignVariable(name, d.lower, d.upper, value),)
+                    + self.design[i + 1 :]
+                )
+        if value < 0.0:
+            raise DesignVariableOutOfBounds(name, value, 0.0, np.inf)
+        self._pm_values[name] = value
+
+    @property
+    def design_names(self) -> tuple[str, ...]:
+        """Names of the design variables in order."""
+        return tuple(d.name for d in self.design)
+
+    @property
+    def y0(self) -> np.ndarray:
+        """Nominal design values [kg], (ny,)."""
+        return np.array([d.nominal for d in self.design])
+
+    @property
+    def ny(self) -> int:
+        """Number of design variables."""
+        return len(self.design)
+
+    def check_q(self, q) -> np.ndarray:
+        """Validate joint coordinates (nv,) or (n, nv) and return them as an array."""
+        q = np.asarray(q, dtype=float)
+        if q.shape[-1:] != (self.nv,) or q.ndim not in (1, 2):
+            raise ConfigurationError(
+                f"expected {self.nv} joint values ({', '.join(self.joint_names)}) per pose, "
+                f"got an array of shape {q.shape}"
+            )
+        if not np.all(np.isfinite(q)):
+            raise ConfigurationError("joint values must be finite")
+        return q
+
+    def check_y(self, y, *, bounds: bool = True) -> np.ndarray:
+        """Validate design values (ny,) or per-pose (n, ny); ``None`` gives the nominal ones."""
+        if y is None:
+            return self.y0
+        if isinstance(y, dict):
+            unknown = set(y) - set(self.design_names)
+            if unknown:
+                raise DesignVariableNotFound(sorted(unknown)[0], self.design_names)
+            y = [y.get(d.name, d.nominal) for d in self.design]
+        y = np.asarray(y, dtype=float)
+        if y.shape[-1:] != (self.ny,) or y.ndim not in (1, 2):
+            raise ConfigurationError(
+                f"expected {self.ny} design values ({', '.join(self.design_names)}), "
+                f"got shape {y.shape}"
+            )
+        if not np.all(np.isfinite(y)):
+            raise ConfigurationError("design values must be finite")
+        if bounds:
+            for d, v in zip(self.design, np.atleast_2d(y).T):
+                bad = (v < d.lower - 1e-12) | (v > d.upper + 1e-12)
+                if np.any(bad):
+                    raise DesignVariableOutOfBounds(d.name, float(v[bad][0]), d.lower, d.upper)
+        return y
+
+    def joint_index(self, name: str) -> int:
+        """Index of a moving joint in the coordinate vector."""
+        if name not in self.joint_names:
+            from pinflex.exceptions import JointNotFound
+
+            raise JointNotFound(name, self.joint_names)
+        return self.joint_names.index(name)
+
+    def pin_q(self, q: np.ndarray) -> np.ndarray:
+        """Pinocchio joint values (nv,) of user coordinates (relative angles)."""
+        return self.coord_map @ q
+
+    def pin_configuration(self, q: np.ndarray) -> np.ndarray:
+        """Pinocchio configuration vector (nq,) of user coordinates."""
+        qv = self.pin_q(np.asarray(q, dtype=float))
+        out = np.zeros(self.model.nq)
+        for j in range(1, self.model.njoints):
+            jm = self.model.joints[j]
+            v = qv[jm.idx_v]
+            if jm.nq == 2:
+                out[jm.idx_q : jm.idx_q + 2] = np.cos(v), np.sin(v)
+            else:
+                out[jm.idx_q] = v
+        return out
+
+    # ------------------------------------------------------------------ assembly
+    def pose_terms(self, Q: np.ndarray) -> _PoseTerms:
+        """Pinocchio Jacobians and joint rotations at poses Q (n, nv)."""
+        model, data = self.model, self.data
+        n = Q.shape[0]
+        jac = {link: np.zeros((n, 6, self.nv)) for link in self._carriers}
+        fids = [(link, self._frame_id[link]) for link in self._carriers]
+        for i in range(n if self.nv else 0):
+            qp = self.pin_configuration(Q[i])
+            pin.computeJointJacobians(model, data, qp)
+            for link, fid in fids:
+                jac[link][i] = pin.getFrameJacobian(model, data, fid, pin.LOCAL).reshape(6, -1)
+        for link in jac:
+            jac[link] = jac[link] @ self.coord_map
+        qrel = Q @ self.coord_map.T
+        rot, slide = {}, {}
+        for j in self._joints:
+            if j.kind == "revolute":
+                rot[j.name] = j.R_o @ axis_rotation(j.axis, qrel[:, j.user_col])
+            elif j.kind == "prismatic":
+                slide[j.name] = (j.R_o @ j.axis)[None, :] * qrel[:, j.user_col, None]
+        return _PoseTerms(jac, rot, slide)
+
+    def assemble(self, terms: _PoseTerms, alg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Assemble M without design masses, M per unit design mass, and K.
+
+        Works on any algebra ``alg`` (poses or Taylor coefficients on the leading axis).
+
+        Returns:
+            ``M0`` (b, nd, nd), ``Mdesign`` (ny, b, nd, nd), ``K`` (b, nd, nd).
+        """
+        nd, nx = self.ndof, self.nx
+        twist = self._root_twists(terms, alg)
+        M = None
+        K = None
+        for link in self._flex:
+            e = twist[link]
+            a = self._assembly_arrays[link]
+            bx = alg.const(a["sel"]) if e is None else alg.const(a["sel"]) + a["root"] @ e
+            w = np.concatenate([bx, a["jac"] @ terms.jac[link]], axis=-1)
+            m = alg.mm(np.swapaxes(w, -1, -2), a["mass"] @ w)
+            k = alg.mm(np.swapaxes(bx, -1, -2), a["stiffness"] @ bx)
+            M = m if M is None else M + m
+            K = k if K is None else K + k
+        for link, inertia in self._inertias.items():
+            e = twist[link]
+            jl = terms.jac[link]
+            g = np.concatenate([_zeros_like(jl, nx) if e is None else e, jl], axis=-1)
+            m = alg.mm(np.swapaxes(g, -1, -2), inertia @ g)
+            M = m if M is None else M + m
+        design_index = {d.name: i for i, d in enumerate(self.design)}
+        shape_b = terms.jac[self._carriers[0]].shape[:1] if self._carriers else (1,)
+        Mdesign = np.zeros((self.ny,) + shape_b + (nd, nd))
+        for name, link, xyz, att in self._point_masses:
+            jl = terms.jac[link]
+            tau = self._twist_at(alg, att, twist[link])
+            g = np.concatenate(
+                [_zeros_like(jl, nx) if tau is None else tau, translate_twist(xyz) @ jl], axis=-1
+            )[..., :3, :]
+            m = alg.mm(np.swapaxes(g, -1, -2), g)
+            if name in design_index:
+                Mdesign[design_index[name]] = m
+            else:
+                M = M + self._pm_values[name] * m if M is not None else self._pm_values[name] * m
+        if M is None:
+            M = np.zeros(shape_b + (nd, nd))
+        Kfull = np.zeros(M.shape)
+        if K is not None:
+            Kfull[..., :nx, :nx] = K
+        return M, Mdesign, Kfull
+
+    def _root_twists(self, terms: _PoseTerms, alg) -> dict:
+        """Elastic twist of every link root in link axes, (b, 6, nx), or None when zero."""
+        twist = {self._order[0]: None}
+        for j in self._joints:
+            tau = self._twist_at(alg, j.attach, twist[j.parent])
+            if tau is None:
+                twist[j.child] = None
+                continue
+            if j.kind == "prismatic":
+                # move to the child origin, offset R_o a d from the guide's mount point
+                tau = tau + alg.mm(_offset_block(terms.slide[j.name]), tau)
+                R = alg.const(j.R_o)
+            elif j.kind == "revolute":
+                R = terms.rot[j.name]
+            else:
+                R = alg.const(j.R_o)
+            twist[j.child] = j.proj @ alg.mm(_rot6(np.swapaxes(R, -1, -2)), tau)
+        return twist
+
+    @staticmethod
+    def _twist_at(alg, att: _Attachment, root_twist):
+        has_const = np.any(att.const)
+        if root_twist is None or att.lin is None:
+            return alg.const(att.const) if has_const else None
+        out = att.lin @ root_twist
+        return out + alg.const(att.const) if has_const else out
+
+    def matrices(self, Q, y=None, *, check_bounds: bool = True):
+        """Mass and stiffness matrices at one pose (nv,) or many (n, nv).
+
+        Args:
+            Q: Joint coordinates (user convention) [rad or m].
+            y: Design values [kg] (default: nominal).
+            check_bounds: Raise when a design value leaves its bounds.
+
+        Returns:
+            ``(M, K)``, each (ndof, ndof) for one pose or (n, ndof, ndof).
+        """
+        Q = self.check_q(Q)
+        y = self.check_y(y, bounds=check_bounds)
+        single = Q.ndim == 1
+        Qb = Q[None] if single else Q
+        if y.ndim == 2 and y.shape[0] != Qb.shape[0]:
+            raise ConfigurationError(
+                f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
+            )
+        M0, Md, K = self.assemble(self.pose_terms(Qb), BatchAlgebra(Qb.shape[0]))
+        if self.ny:
+            M = M0 + (np.tensordot(y, Md, axes=(0, 0)) if y.ndim == 1
+                      else np.einsum("nj,jnab->nab", y, Md))
+        else:
+            M = M0
+        return (M[0], K[0]) if single else (M, K)
+
+    # ------------------------------------------------------------------ modal analysis
+    def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
+        """Non-rigid eigenfrequencies [Hz] at one pose (k,) or many (n, k), ascending.
+
+        Batched: all poses are assembled and solved together.
+        """
+        return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds)
+
+    def eigvals_from(self, M: np.ndarray, K: np.ndarray) -> np.ndarray:
+        """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof)."""
+        return modal.eigvals_from(self, M, K)
+
+    def modes(self, q, y=None, *, n_modes: int | None = None, check_bounds=True):
+        """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose."""
+        return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds)

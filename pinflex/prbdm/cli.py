@@ -1,0 +1,98 @@
+"""``pinflex prbdm``: fit a pseudo-rigid-body dynamic model to a beam and report it.
+
+The main CLI calls :func:`add_parser` with its subparsers object; :func:`run` executes the
+parsed arguments and returns the exit status. With ``--json`` one JSON object goes to stdout
+(progress bars go to stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..exceptions import PinflexError
+from .beams import random_beam, uniform_beam
+from .mapping import OBJECTIVES, fit_prbdm
+from .problem import STIFFNESS_LAWS, compute_truth
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Register the ``prbdm`` subcommand on an argparse subparsers object.
+
+    Args:
+        subparsers: The object returned by ``ArgumentParser.add_subparsers()``.
+
+    Returns:
+        The new subparser (its default ``func`` is :func:`run`).
+    """
+    parser = subparsers.add_parser(
+        "prbdm", help="fit an nR pseudo-rigid-body dynamic model to a compliant beam",
+        description="Fit link lengths and spring stiffnesses of an nR PRBDM so that its "
+                    "frequencies and/or large tip deflections match a converged beam model.")
+    parser.add_argument("--beam", choices=("uniform", "random"), default="uniform",
+                        help="paper 001's uniform steel beam or a seeded random planform")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the random planform and of the multistart points")
+    parser.add_argument("--sections", type=int, default=10,
+                        help="interior vertices p of a random planform (paper: 10)")
+    parser.add_argument("--links", type=int, default=5, help="number of revolute joints n")
+    parser.add_argument("--modes", type=int, default=None,
+                        help="bending modes to match (default: n)")
+    parser.add_argument("--objective", choices=("eigen", "deflection", "pareto", "combined"),
+                        default="eigen", help="what the mapping minimises")
+    parser.add_argument("--stiffness-law", choices=STIFFNESS_LAWS, default="segment",
+                        help="'segment' (pose-independent physical springs, default) or "
+                             "'paper' (eq. 14, one factor per pose)")
+    parser.add_argument("--poses", choices=("straight", "paper"), default="straight",
+                        help="poses where frequencies are compared")
+    parser.add_argument("--starts", type=int, default=8, help="multistart points per search")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    parser.set_defaults(func=run)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``pinflex prbdm``; return the process exit status."""
+    if args.objective not in OBJECTIVES:
+        print(f"error: unknown objective {args.objective!r}", file=sys.stderr)
+        return 2
+    try:
+        beam = (uniform_beam() if args.beam == "uniform"
+                else random_beam(args.seed, n_sections=args.sections))
+        n_modes = args.modes if args.modes is not None else args.links
+        truth = compute_truth(beam, max(n_modes, 1))
+        fit = fit_prbdm(beam, args.links, n_modes, objective=args.objective,
+                        stiffness_law=args.stiffness_law, poses=args.poses,
+                        n_starts=args.starts, seed=args.seed, truth=truth,
+                        progress=not args.no_progress)
+    except PinflexError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
+    if args.json:
+        print(fit.to_json())
+        return 0
+    out = fit.to_dict()
+    print(f"{args.links}R PRBDM of the {fit.beam} beam, objective {fit.objective}, "
+          f"stiffness law {fit.stiffness_law}")
+    print(f"  link lengths [m]   {[round(v, 5) for v in out['link_lengths_m']]}")
+    print(f"  stiffness [N m/rad] {[float(f'{v:.6g}') for v in out['stiffness']]}")
+    print(f"  truth [Hz]         {[round(v, 4) for v in out['truth_hz']]}")
+    print(f"  model [Hz]         {[round(v, 4) for v in out['model_hz']]}")
+    print(f"  eigen error        {fit.eigen_error:.3e}")
+    print(f"  deflection error   {fit.deflection_error:.3e}")
+    print(f"  combined error     {fit.combined_error:.3e}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Stand-alone entry point (``python -m pinflex.prbdm.cli``)."""
+    parser = argparse.ArgumentParser(prog="pinflex")
+    sub = parser.add_subparsers(dest="command", required=True)
+    add_parser(sub)
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,366 @@
+"""Fit PRBDM parameters to a beam (paper 001, eq. 15-19, 22-23, 27).
+
+Objectives (losses defined in :mod:`pinflex.prbdm.problem`):
+
+* ``"eigen"``: frequencies only (eq. 17);
+* ``"deflection"``: tip positions only (eq. 18);
+* ``"combined"``: :math:`e_{eig}^2 + e_{defl}^2`, the squared distance to the origin of eq. 27;
+* ``"pareto"``: both anchors, then a weighted-sum sweep between them, then the front point
+  closest to the origin (eq. 27), compared with a direct multistart of the combined objective.
+
+Each search is a multistart (eq. 23: fractions sampled uniformly on the simplex above the 0.02
+floor as in Smith and Tromble; correction factors scaled so the first frequency matches, then
+perturbed) of a bounded trust-region least-squares solver (scipy ``least_squares``, 'trf'):
+the losses are root-mean-square norms, so their squares are sums of squared residuals, which
+Gauss-Newton steps reduce far faster than a general NLP solver. Bounds are eq. (15c-d); the
+simplex equality (15b) is a residual on the fractions' sum, to which the losses are blind
+(they use the normalised fractions).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..exceptions import InvalidChain, MappingFailed
+from .beams import Planform
+from .chain import PrbdmChain, build_chain
+from .problem import (
+    MIN_FRACTION,
+    Evaluation,
+    MappingProblem,
+    TruthData,
+    build_problem,
+    decode,
+    evaluate,
+    static_stiffness,
+)
+
+OBJECTIVES = ("eigen", "deflection", "combined", "pareto")
+
+
+@dataclass(frozen=True)
+class PrbdmFit:
+    """Result of a PRBDM mapping.
+
+    Attributes:
+        beam: Beam label.
+        n_joints: Number of revolute joints n.
+        n_modes: Number of matched modes.
+        objective: Objective that was minimised.
+        stiffness_law: ``"segment"`` or ``"paper"``.
+        link_fractions: Link-length fractions :math:`\\gamma` of links 0..n, (n + 1,) [-].
+        link_lengths_m: Link lengths, (n + 1,) [m].
+        stiffness: Static spring stiffness of joints 1..n, (n,) [N m/rad].
+        correction_factors: Stiffness correction factors (per joint or per pose) [-].
+        truth_hz: Beam frequencies, (n_modes,) [Hz].
+        model_hz: Chain frequencies at the first comparison pose, (n_modes,) [Hz].
+        eigen_error: RMS relative frequency error over poses [-].
+        deflection_error: RMS displacement-normalised tip error over loads [-].
+        deflection_error_position: Same, normalised by the tip position (eq. 19) [-].
+        combined_error: :math:`\\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
+        pose_errors: Relative frequency error per pose, (m,) [-].
+        load_errors: Displacement-normalised tip error per load, (l,) [-].
+        alphas: Load levels :math:`PL^2/EI_{eq}`, (l,) [-].
+        truth_tips_m: Elastica tip positions, (l, 2) [m].
+        model_tips_m: Chain tip positions, (l, 2) [m].
+        n_starts: Multistart points per search.
+        n_poses: Number of comparison poses m.
+        pareto: Front points (eigen_error, deflection_error), sorted by deflection error.
+    """
+
+    beam: str
+    n_joints: int
+    n_modes: int
+    objective: str
+    stiffness_law: str
+    link_fractions: tuple[float, ...]
+    link_lengths_m: tuple[float, ...]
+    stiffness: tuple[float, ...]
+    correction_factors: tuple[float, ...]
+    truth_hz: tuple[float, ...]
+    model_hz: tuple[float, ...]
+    eigen_error: float
+    deflection_error: float
+    deflection_error_position: float
+    combined_error: float
+    pose_errors: tuple[float, ...]
+    load_errors: tuple[float, ...]
+    alphas: tuple[float, ...]
+    truth_tips_m: tuple[tuple[float, float], ...]
+    model_tips_m: tuple[tuple[float, float], ...]
+    n_starts: int
+    n_poses: int
+    pareto: tuple[tuple[float, float], ...] = field(default=())
+
+    def to_dict(self) -> dict:
+        """Plain-Python dictionary (JSON-ready); ``link_lengths`` aliases the lengths [m]."""
+        out = asdict(self)
+        out["link_lengths"] = list(self.link_lengths_m)
+        return out
+
+    def to_json(self, indent: int | None = None) -> str:
+        """JSON text of :meth:`to_dict` (NaN written as null)."""
+        return json.dumps(_nan_to_none(self.to_dict()), indent=indent)
+
+    def chain(self, planform: Planform) -> PrbdmChain:
+        """Pinocchio chain of the fitted model (static stiffness)."""
+        return build_chain(planform, np.array(self.link_fractions), np.array(self.stiffness))
+
+
+def _nan_to_none(value):
+    if isinstance(value, dict):
+        return {k: _nan_to_none(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_nan_to_none(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+class ProgressBar:
+    """Minimal text progress bar on stderr (silent unless enabled)."""
+
+    def __init__(self, total: int, label: str, enabled: bool = True, width: int = 28):
+        self.total, self.label, self.enabled, self.width = max(total, 1), label, enabled, width
+        self.count = 0
+
+    def update(self, best: float) -> None:
+        """Advance by one and show the best loss so far."""
+        self.count += 1
+        if not self.enabled:
+            return
+        filled = int(self.width * self.count / self.total)
+        sys.stderr.write(f"\r{self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
+                         f"{self.count}/{self.total} best {best:.3e}")
+        if self.count >= self.total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+def _weights(problem: MappingProblem, kind: str, weight: float | None) -> tuple[float, float]:
+    """Weights (eigen, deflection) on the squared losses of an objective."""
+    if weight is not None:
+        return weight, 1.0 - weight
+    return {"eigen": (1.0, 0.0), "deflection": (0.0, 1.0)}.get(kind, (1.0, 1.0))
+
+
+def _residual_function(problem: MappingProblem, kind: str, weight: float | None = None):
+    """Residuals r(x) with :math:`\|r\|^2 = w_e e_{eig}^2 + w_d e_{defl}^2` plus a gauge term.
+
+    The losses only see the normalised fractions :math:`\gamma/\sum\gamma`, so the residual
+    :math:`\sum\gamma - 1` pins the scale and enforces eq. (15b).
+    """
+    w_eig, w_defl = _weights(problem, kind, weight)
+    n1 = problem.n_joints + 1
+    n_eig = problem.poses.shape[0] * problem.n_modes
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        ev = evaluate(problem, x, deflection=w_defl > 0.0)
+        res = ev.residuals
+        parts = [np.sqrt(w_eig) * res[:n_eig]]
+        if w_defl > 0.0:
+            parts.append(np.sqrt(w_defl) * res[n_eig:])
+        parts.append([np.sum(x[:n1]) - 1.0])
+        return np.concatenate(parts)
+
+    return fun
+
+
+def _bounds(problem: MappingProblem) -> tuple[np.ndarray, np.ndarray]:
+    n1 = problem.n_joints + 1
+    lower = np.concatenate([np.full(n1, MIN_FRACTION), np.full(problem.n_stiffness_params, -25.0)])
+    upper = np.concatenate([np.full(n1, 1.0 - MIN_FRACTION),
+                            np.full(problem.n_stiffness_params, 25.0)])
+    return lower, upper
+
+
+def start_points(problem: MappingProblem, n_starts: int, seed: int) -> np.ndarray:
+    """Multistart designs (eq. 23), shape (n_starts, n_params)."""
+    rng = np.random.default_rng(seed)
+    n1 = problem.n_joints + 1
+    free = 1.0 - MIN_FRACTION * n1
+    if free <= 0.0:
+        raise InvalidChain(f"{problem.n_joints}R needs {n1} links of at least {MIN_FRACTION} "
+                           "of the length; use fewer joints")
+    starts = []
+    for _ in range(n_starts):
+        gamma = MIN_FRACTION + free * rng.dirichlet(np.ones(n1))
+        x = np.concatenate([gamma, np.zeros(problem.n_stiffness_params)])
+        ev = evaluate(problem, x, deflection=False)
+        scale = problem.truth_hz[0] / ev.model_hz[:, 0]
+        log_k = 2.0 * np.log(scale)
+        if problem.stiffness_law == "segment":
+            log_k = np.full(problem.n_joints, float(np.mean(log_k)))
+        x[n1:] = log_k + rng.normal(0.0, 0.2, problem.n_stiffness_params)
+        starts.append(x)
+    return np.array(starts)
+
+
+def _local(problem: MappingProblem, kind: str, x0: np.ndarray, weight: float | None = None,
+           max_nfev: int | None = None) -> np.ndarray:
+    """Bounded trust-region least squares (scipy ``least_squares``, 'trf') from x0."""
+    lower, upper = _bounds(problem)
+    x0 = np.clip(x0, lower + 1e-12, upper - 1e-12)
+    # A perfect frequency fit is reachable, so eigen-only runs to round-off; with deflection the
+    # optimum has a non-zero residual and a relative cost change of 1e-9 is plenty.
+    tol = 1e-12 if kind == "eigen" else 1e-9
+    result = least_squares(_residual_function(problem, kind, weight), x0, bounds=(lower, upper),
+                           method="trf", ftol=tol, xtol=tol, gtol=tol,
+                           max_nfev=max_nfev or (40 if kind == "eigen" else 10) * problem.n_params)
+    x = np.asarray(result.x, dtype=float)
+    n1 = problem.n_joints + 1
+    x[:n1] = np.clip(x[:n1], MIN_FRACTION, 1.0 - MIN_FRACTION)
+    x[:n1] /= x[:n1].sum()
+    return x
+
+
+def _score(ev: Evaluation, kind: str) -> float:
+    if kind == "eigen":
+        return ev.eigen_error
+    if kind == "deflection":
+        return ev.deflection_error
+    return ev.combined_error
+
+
+def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int = 0,
+               progress: bool = False) -> tuple[np.ndarray, Evaluation]:
+    """Best local least-squares solution over multistart points for one objective.
+
+    Raises:
+        MappingFailed: If every start fails to produce finite losses.
+    """
+    best_x, best_ev, best = None, None, np.inf
+    bar = ProgressBar(n_starts, f"{problem.n_joints}R {kind}", progress)
+    for x0 in start_points(problem, n_starts, seed):
+        try:
+            x = _local(problem, kind, x0)
+            ev = evaluate(problem, x)
+        except (InvalidChain, np.linalg.LinAlgError, ValueError):
+            bar.update(best)
+            continue
+        score = _score(ev, kind)
+        if np.isfinite(score) and score < best:
+            best_x, best_ev, best = x, ev, score
+        bar.update(best)
+    if best_x is None:
+        raise MappingFailed(f"all {n_starts} starts of the {kind} mapping failed for "
+                            f"{problem.n_joints}R; try more starts or another seed")
+    return best_x, best_ev
+
+
+def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.ndarray,
+                 n_points: int = 7, progress: bool = False) -> list[tuple[np.ndarray, Evaluation]]:
+    """Weighted-sum Pareto front between the eigen and deflection anchors.
+
+    For weights w evenly spaced in (0, 1), minimise :math:`w e_{eig}^2 + (1 - w) e_{defl}^2`,
+    starting from both anchors and from the previous front point; dominated points are
+    dropped. (A weighted sum finds the convex hull of the front; the anchors close its ends.)
+    """
+    points = [(eigen_x, evaluate(problem, eigen_x)), (deflection_x, evaluate(problem, deflection_x))]
+    bar = ProgressBar(n_points, f"{problem.n_joints}R pareto", progress)
+    previous = eigen_x
+    for weight in np.linspace(1.0, 0.0, n_points + 2)[1:-1]:
+        best = None
+        for x0 in (previous, eigen_x, deflection_x):
+            try:
+                x = _local(problem, "weighted", x0, weight=weight)
+            except (InvalidChain, np.linalg.LinAlgError, ValueError):
+                continue
+            ev = evaluate(problem, x)
+            value = weight * ev.eigen_error**2 + (1.0 - weight) * ev.deflection_error**2
+            if best is None or value < best[0]:
+                best = (value, x, ev)
+        if best is not None:
+            points.append((best[1], best[2]))
+            previous = best[1]
+        bar.update(min(p[1].combined_error for p in points))
+
+    def dominated(p, q) -> bool:
+        return (q[1].eigen_error <= p[1].eigen_error and q[1].deflection_error
+                <= p[1].deflection_error and (q[1].eigen_error < p[1].eigen_error
+                                              or q[1].deflection_error < p[1].deflection_error))
+
+    kept = [p for p in points if not any(dominated(p, q) for q in points)]
+    return sorted(kept, key=lambda p: p[1].deflection_error)
+
+
+def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
+              objective: str = "eigen", stiffness_law: str = "segment",
+              poses: str | np.ndarray = "straight", n_starts: int = 16, seed: int = 0,
+              truth: TruthData | None = None, pareto_points: int = 7,
+              progress: bool = False) -> PrbdmFit:
+    """Fit an nR PRBDM to a beam.
+
+    Args:
+        planform: The beam.
+        n_joints: Number of revolute joints n.
+        n_modes: Modes to match; default n.
+        objective: ``"eigen"``, ``"deflection"``, ``"combined"`` or ``"pareto"``.
+        stiffness_law: ``"segment"`` (pose-independent physical springs with per-joint factors)
+            or ``"paper"`` (eq. 14, per-pose factors).
+        poses: Comparison poses for frequencies, see :func:`~pinflex.prbdm.problem.build_problem`.
+        n_starts: Multistart points per search.
+        seed: Seed of the start points.
+        truth: Precomputed truth (:func:`~pinflex.prbdm.problem.compute_truth`).
+        pareto_points: Interior weights of the Pareto sweep.
+        progress: Show a progress bar on stderr.
+
+    Returns:
+        The fit; for ``"pareto"`` the front is in ``fit.pareto`` and the returned model is the
+        best of the front point closest to the origin (eq. 27), that point polished with the
+        combined objective, and a direct combined multistart.
+
+    Raises:
+        InvalidChain: For bad settings.
+        MappingFailed: If no start succeeds.
+    """
+    if objective not in OBJECTIVES:
+        raise InvalidChain(f"objective = {objective!r}; expected one of {OBJECTIVES}")
+    problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth)
+    front: list[tuple[np.ndarray, Evaluation]] = []
+    if objective == "pareto":
+        x_e, _ = multistart(problem, "eigen", n_starts, seed, progress)
+        x_d, _ = multistart(problem, "deflection", max(2, n_starts // 2), seed + 1, progress)
+        front = pareto_front(problem, x_e, x_d, pareto_points, progress)
+        x, ev = min(front, key=lambda p: p[1].combined_error)
+        x_pol = _local(problem, "combined", x)
+        ev_pol = evaluate(problem, x_pol)
+        if ev_pol.combined_error < ev.combined_error:
+            x, ev = x_pol, ev_pol
+        x_c, ev_c = multistart(problem, "combined", max(2, n_starts // 2), seed + 2, progress)
+        if ev_c.combined_error < ev.combined_error:
+            x, ev = x_c, ev_c
+    else:
+        x, ev = multistart(problem, objective, n_starts, seed, progress)
+    return _make_fit(problem, x, ev, objective, n_starts, front)
+
+
+def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective: str,
+              n_starts: int, front: list) -> PrbdmFit:
+    gamma, factors = decode(problem, x)
+    gamma = gamma / gamma.sum()
+    stiffness = static_stiffness(problem, gamma, factors)
+
+    def tup(a) -> tuple:
+        return tuple(float(v) for v in np.asarray(a).ravel())
+
+    return PrbdmFit(
+        beam=problem.planform.name, n_joints=problem.n_joints, n_modes=problem.n_modes,
+        objective=objective, stiffness_law=problem.stiffness_law, link_fractions=tup(gamma),
+        link_lengths_m=tup(gamma * problem.planform.length_m), stiffness=tup(stiffness),
+        correction_factors=tup(factors), truth_hz=tup(problem.truth_hz),
+        model_hz=tup(ev.model_hz[0]), eigen_error=ev.eigen_error,
+        deflection_error=ev.deflection_error,
+        deflection_error_position=ev.deflection_error_position,
+        combined_error=ev.combined_error, pose_errors=tup(ev.pose_errors),
+        load_errors=tup(ev.load_errors), alphas=tup(problem.alphas),
+        truth_tips_m=tuple(tup(t) for t in problem.truth_tips_m),
+        model_tips_m=tuple(tup(t) for t in ev.model_tips_m), n_starts=n_starts,
+        n_poses=int(problem.poses.shape[0]),
+        pareto=tuple((float(p[1].eigen_error), float(p[1].deflection_error)) for p in front),
+    )

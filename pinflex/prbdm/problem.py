@@ -1,0 +1,319 @@
+"""PRBDM mapping problem: truth data, parameterisation and losses (paper 001, eq. 10-19, 27).
+
+Design variables are the link-length fractions :math:`\\gamma` (links 0..n, on the simplex,
+each >= 0.02, eq. 15) and stiffness correction factors, stored as logarithms. Two stiffness
+laws are offered:
+
+* ``"paper"`` (eq. 14): :math:`K_j(i) = k_i \\sqrt{E I_j / \\hat m_j}`, one factor :math:`k_i` per
+  pose i, :math:`I_j` the mean second moment of area and :math:`\\hat m_j` the mass of link j.
+  Tip statics use the mean factor (eq. 25), the paper leaving this open.
+* ``"segment"`` (pinflex default): :math:`K_j = c_j / \\int_{piece\\ j} dx / EI(x)`, one factor
+  per joint, pose independent. Piece j is the stretch of beam that joint j stands for, from the
+  middle of link j-1 (the root for j = 1, link 0 being clamped) to the middle of link j (the tip
+  for j = n); :math:`c_j = 1` is already a physical spring, so the optimiser only corrects it.
+
+Losses (fractions, not percent):
+
+* eigen: per pose, :math:`\\|f_{truth} - f_{model}(\\theta_i)\\|_2 / \\|f_{truth}\\|_2` on the first
+  ``n_modes`` frequencies in Hz (eq. 16); the loss is the root mean square over poses.
+* deflection: per load, :math:`\\|P_{truth} - P_{model}\\|_2 / \\|P_{truth} - P_0\\|_2` with
+  :math:`P_0` the undeformed tip, i.e. normalised by the tip *displacement*. Eq. (19) normalises by
+  the tip position vector, which is about :math:`L/|\\Delta|` times more lenient; that value is
+  kept as ``deflection_error_position``. The loss is the root mean square over loads.
+* combined: :math:`\\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27).
+
+Loads are dead tip forces perpendicular to the undeformed beam with
+:math:`\\alpha = P L^2 / EI_{eq}` (:func:`~pinflex.prbdm.beams.equivalent_bending_stiffness`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import InvalidChain, NewtonDivergence
+from .beams import Planform, chain_segments, equivalent_bending_stiffness
+from .chain import PrbdmChain, build_chain, chain_frequencies, solve_tip_statics
+from .truth import BeamModes, beam_frequencies, elastica_tip
+
+STIFFNESS_LAWS = ("segment", "paper")
+DEFAULT_ALPHAS = (0.5, 1.0, 2.0, 5.0)
+MIN_FRACTION = 0.02
+#: Loss assigned to a load whose Newton solve fails (100 % error), so optimisers move away.
+FAILED_LOAD_ERROR = 1.0
+
+
+def paper_poses(n_joints: int, offset_rad: float = 0.05, step_rad: float = 0.1) -> np.ndarray:
+    """Pose sweep of eq. (10)-(11): all joints at :math:`\\xi + i\\epsilon`, shape (m, n) [rad].
+
+    Poses are added while the end link's world angle :math:`n(\\xi + i\\epsilon)` stays at or
+    below :math:`\\pi/2`.
+    """
+    count = int(np.floor((np.pi / 2 / n_joints - offset_rad) / step_rad + 1e-12)) + 1
+    angles = offset_rad + step_rad * np.arange(max(count, 1))
+    return np.repeat(angles[:, None], n_joints, axis=1)
+
+
+@dataclass(frozen=True)
+class MappingProblem:
+    """Truth data and settings of one PRBDM mapping.
+
+    Attributes:
+        planform: The beam.
+        n_joints: Number of revolute joints n.
+        n_modes: Number of bending modes matched (<= n).
+        truth_hz: Beam frequencies, shape (n_modes,) [Hz].
+        poses: Poses where frequencies are compared, shape (m, n) [rad].
+        forces_n: Tip forces (Fx, Fz), shape (l, 2) [N].
+        truth_tips_m: Elastica tip positions (x, z), shape (l, 2) [m].
+        stiffness_law: ``"segment"`` or ``"paper"``.
+        alphas: Load levels :math:`\\alpha = PL^2/EI_{eq}`, shape (l,).
+    """
+
+    planform: Planform
+    n_joints: int
+    n_modes: int
+    truth_hz: np.ndarray
+    poses: np.ndarray
+    forces_n: np.ndarray
+    truth_tips_m: np.ndarray
+    stiffness_law: str
+    alphas: np.ndarray
+    _warm: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def n_stiffness_params(self) -> int:
+        """Number of stiffness correction factors."""
+        return self.n_joints if self.stiffness_law == "segment" else int(self.poses.shape[0])
+
+    @property
+    def n_params(self) -> int:
+        """Length of the design vector: n + 1 fractions and the log correction factors."""
+        return self.n_joints + 1 + self.n_stiffness_params
+
+
+@dataclass(frozen=True)
+class TruthData:
+    """Precomputed truth for one beam, reusable across mappings.
+
+    Attributes:
+        modes: Converged beam frequencies.
+        alphas: Load levels, shape (l,).
+        forces_n: Tip forces, shape (l, 2) [N].
+        tips_m: Elastica tip positions, shape (l, 2) [m].
+    """
+
+    modes: BeamModes
+    alphas: np.ndarray
+    forces_n: np.ndarray
+    tips_m: np.ndarray
+
+
+def compute_truth(planform: Planform, n_modes: int = 5,
+                  alphas: tuple[float, ...] = DEFAULT_ALPHAS) -> TruthData:
+    """Converged beam frequencies and elastica tips under transverse dead loads.
+
+    Args:
+        planform: The beam.
+        n_modes: Number of bending modes.
+        alphas: Load levels :math:`\\alpha = PL^2/EI_{eq}` (downward tip force).
+    """
+    modes = beam_frequencies(planform, n_modes)
+    ei = equivalent_bending_stiffness(planform)
+    alpha = np.asarray(alphas, dtype=float)
+    forces = np.column_stack([np.zeros_like(alpha), -alpha * ei / planform.length_m**2])
+    tips = np.array([elastica_tip(planform, f).tip_m for f in forces]).reshape(-1, 2)
+    return TruthData(modes, alpha, forces, tips)
+
+
+def build_problem(planform: Planform, n_joints: int, n_modes: int | None = None,
+                  poses: str | np.ndarray = "straight", stiffness_law: str = "segment",
+                  truth: TruthData | None = None) -> MappingProblem:
+    """Assemble a mapping problem.
+
+    Args:
+        planform: The beam.
+        n_joints: Number of revolute joints n (>= 1).
+        n_modes: Modes to match; default n (capped at the modes in ``truth``).
+        poses: ``"straight"`` (theta = 0, where the beam's frequencies are defined),
+            ``"paper"`` (the sweep of :func:`paper_poses`), or an array of shape (m, n) [rad].
+        stiffness_law: ``"segment"`` or ``"paper"`` (see the module docstring).
+        truth: Precomputed truth; computed with :func:`compute_truth` if omitted.
+
+    Raises:
+        InvalidChain: For an unknown law or pose set, or too many modes.
+    """
+    if int(n_joints) != n_joints or n_joints < 1:
+        raise InvalidChain(f"n_joints = {n_joints!r} must be a positive integer")
+    if stiffness_law not in STIFFNESS_LAWS:
+        raise InvalidChain(f"stiffness_law = {stiffness_law!r}; expected one of {STIFFNESS_LAWS}")
+    n_modes = n_joints if n_modes is None else int(n_modes)
+    if not 1 <= n_modes <= n_joints:
+        raise InvalidChain(f"an {n_joints}R chain has {n_joints} modes; n_modes = {n_modes}")
+    if truth is None:
+        truth = compute_truth(planform, n_modes)
+    if truth.modes.freq_hz.size < n_modes:
+        raise InvalidChain(f"truth has {truth.modes.freq_hz.size} modes, {n_modes} requested")
+    if isinstance(poses, str):
+        if poses == "straight":
+            pose_array = np.zeros((1, n_joints))
+        elif poses == "paper":
+            pose_array = paper_poses(n_joints)
+        else:
+            raise InvalidChain(f"poses = {poses!r}; expected 'straight', 'paper' or an array")
+    else:
+        pose_array = np.atleast_2d(np.asarray(poses, dtype=float))
+        if pose_array.shape[1] != n_joints:
+            raise InvalidChain(f"poses have {pose_array.shape[1]} columns, need {n_joints}")
+    return MappingProblem(planform, int(n_joints), n_modes, truth.modes.freq_hz[:n_modes].copy(),
+                          pose_array, truth.forces_n, truth.tips_m, stiffness_law, truth.alphas)
+
+
+def joint_pieces(planform: Planform, gamma: np.ndarray) -> np.ndarray:
+    """Boundaries of the beam pieces the joints stand for, shape (n + 1,) [m]."""
+    lengths = np.asarray(gamma) * planform.length_m
+    starts = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+    mids = starts + 0.5 * lengths
+    return np.concatenate([[0.0], mids[1:-1], [planform.length_m]])
+
+
+def reference_stiffness(problem: MappingProblem, gamma: np.ndarray) -> np.ndarray:
+    """Uncorrected spring stiffness of each joint for the problem's law, shape (n,)."""
+    planform = problem.planform
+    if problem.stiffness_law == "segment":
+        pieces = chain_segments(planform, joint_pieces(planform, gamma))
+        return np.array([1.0 / seg.compliance_1_n_m for seg in pieces])
+    lengths = np.asarray(gamma) * planform.length_m
+    starts = np.cumsum(lengths)[:-1]
+    links = chain_segments(planform, np.concatenate([starts, [planform.length_m]]))
+    e = planform.material.youngs_modulus_pa
+    return np.array([np.sqrt(e * seg.mean_area_moment_m4 / seg.mass_kg) for seg in links])
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Losses of one design.
+
+    Attributes:
+        eigen_error: RMS over poses of the relative frequency error [-].
+        deflection_error: RMS over loads of the displacement-normalised tip error [-].
+        deflection_error_position: Same, normalised by the tip position vector (eq. 19) [-].
+        combined_error: :math:`\\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
+        pose_errors: Relative frequency error per pose, shape (m,).
+        load_errors: Displacement-normalised tip error per load, shape (l,).
+        model_hz: Chain frequencies at each pose, shape (m, n_modes) [Hz].
+        model_tips_m: Chain tip positions, shape (l, 2) [m] (NaN where Newton failed).
+        failed_loads: Number of loads whose Newton solve failed.
+        residuals: Weighted residual vector whose squared norm is
+            :math:`e_{eig}^2 + e_{defl}^2` (eigen part first, shape (m n_modes + 2 l,)).
+    """
+
+    eigen_error: float
+    deflection_error: float
+    deflection_error_position: float
+    combined_error: float
+    pose_errors: np.ndarray
+    load_errors: np.ndarray
+    model_hz: np.ndarray
+    model_tips_m: np.ndarray
+    failed_loads: int
+    residuals: np.ndarray
+
+
+def decode(problem: MappingProblem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Split a design vector into fractions (n + 1,) and correction factors."""
+    n1 = problem.n_joints + 1
+    return np.asarray(x[:n1], dtype=float), np.exp(np.asarray(x[n1:], dtype=float))
+
+
+def stiffness_per_pose(problem: MappingProblem, gamma: np.ndarray, factors: np.ndarray,
+                       ref: np.ndarray | None = None) -> np.ndarray:
+    """Spring stiffness at every pose, shape (m, n) [N m/rad]."""
+    ref = reference_stiffness(problem, gamma) if ref is None else ref
+    if problem.stiffness_law == "segment":
+        return np.repeat((factors * ref)[None, :], problem.poses.shape[0], axis=0)
+    return factors[:, None] * ref[None, :]
+
+
+def static_stiffness(problem: MappingProblem, gamma: np.ndarray, factors: np.ndarray,
+                     ref: np.ndarray | None = None) -> np.ndarray:
+    """Spring stiffness used for tip statics, shape (n,) [N m/rad] (mean factor for 'paper')."""
+    ref = reference_stiffness(problem, gamma) if ref is None else ref
+    if problem.stiffness_law == "segment":
+        return factors * ref
+    return float(np.mean(factors)) * ref
+
+
+def design_chain(problem: MappingProblem, x: np.ndarray) -> PrbdmChain:
+    """The chain of a design vector, with its static stiffness."""
+    gamma, factors = decode(problem, x)
+    gamma = gamma / gamma.sum()
+    return build_chain(problem.planform, gamma, static_stiffness(problem, gamma, factors))
+
+
+def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
+             load_steps: int = 4) -> Evaluation:
+    """Losses of design vector x (see the module docstring).
+
+    Args:
+        problem: The mapping problem.
+        x: Design vector, shape (n_params,).
+        deflection: Whether to solve tip statics (skipped for eigen-only searches).
+        load_steps: Load increments of each cold Newton solve; warm starts from the last
+            converged angles of the same load use one step.
+    """
+    gamma, factors = decode(problem, x)
+    gamma = gamma / gamma.sum()
+    ref = reference_stiffness(problem, gamma)
+    k_pose = stiffness_per_pose(problem, gamma, factors, ref)
+    chain = build_chain(problem.planform, gamma, static_stiffness(problem, gamma, factors, ref))
+    data = chain.model.createData()
+    model_hz = np.empty((problem.poses.shape[0], problem.n_modes))
+    for i, pose in enumerate(problem.poses):
+        posed = replace(chain, stiffness_nm_rad=k_pose[i])
+        model_hz[i] = chain_frequencies(posed, pose, data)[: problem.n_modes]
+    pose_err = (np.linalg.norm(model_hz - problem.truth_hz, axis=1)
+                / np.linalg.norm(problem.truth_hz))
+    eig = float(np.sqrt(np.mean(pose_err**2)))
+    eig_res = ((model_hz - problem.truth_hz) / np.linalg.norm(problem.truth_hz)).ravel()
+    eig_res /= np.sqrt(problem.poses.shape[0])
+    n_loads = problem.forces_n.shape[0]
+    tips = np.full((n_loads, 2), np.nan)
+    load_err = np.full(n_loads, np.nan)
+    defl_res = np.zeros((n_loads, 2))
+    pos_err = np.full(n_loads, np.nan)
+    failed = 0
+    if deflection and n_loads:
+        undeformed = np.array([problem.planform.length_m, 0.0])
+        for ell, force in enumerate(problem.forces_n):
+            tips[ell], ok = _solve_load(problem, chain, data, ell, force, load_steps)
+            failed += not ok
+            truth = problem.truth_tips_m[ell]
+            miss = np.linalg.norm(tips[ell] - truth) if ok else np.nan
+            load_err[ell] = miss / np.linalg.norm(truth - undeformed) if ok else FAILED_LOAD_ERROR
+            defl_res[ell] = ((tips[ell] - truth) / np.linalg.norm(truth - undeformed) if ok
+                             else np.full(2, FAILED_LOAD_ERROR / np.sqrt(2.0)))
+            pos_err[ell] = miss / np.linalg.norm(truth) if ok else FAILED_LOAD_ERROR
+    defl = float(np.sqrt(np.mean(load_err**2))) if deflection and n_loads else float("nan")
+    defl_pos = float(np.sqrt(np.mean(pos_err**2))) if deflection and n_loads else float("nan")
+    combined = float(np.hypot(eig, defl)) if deflection and n_loads else float("nan")
+    residuals = np.concatenate([eig_res, defl_res.ravel() / np.sqrt(max(n_loads, 1))])
+    return Evaluation(eig, defl, defl_pos, combined, pose_err, load_err, model_hz, tips, failed,
+                      residuals)
+
+
+def _solve_load(problem: MappingProblem, chain: PrbdmChain, data: pin.Data, index: int,
+                force: np.ndarray, load_steps: int) -> tuple[np.ndarray, bool]:
+    """Tip of one load, warm-started from the last converged angles of that load."""
+    warm = problem._warm.get((index, chain.n_joints))
+    attempts = [(warm, 1), (None, load_steps)] if warm is not None else [(None, load_steps)]
+    for start, steps in attempts:
+        try:
+            result = solve_tip_statics(chain, force, start, load_steps=steps, data=data)
+        except NewtonDivergence:
+            continue
+        problem._warm[(index, chain.n_joints)] = np.array(result.theta)
+        return result.tip_m, True
+    return np.full(2, np.nan), False
