@@ -226,3 +226,24 @@ def test_external_scheduler_gives_the_local_rows(tmp_path):
     assert remote_rows == local_rows
     with ResultStore(remote) as s:
         assert {r.worker for r in s.rows()} <= workers
+
+
+def test_a_task_that_kills_its_workers_is_recorded_once(tmp_path):
+    """A task that keeps killing workers is stored as failed; the other beams still finish."""
+    from pinflex.batch.runner import Task, run_tasks
+    from pinflex.batch.tasks import run_prbdm_beam
+
+    study = PrbdmStudy(seed=8, n_beams=2, **TINY)
+    configs = [(config_hash(c), c) for c in study.configs()]
+    shared = {"beam": study.beam_settings(), "truth": study.truth_settings()}
+    killer = Task("killer", ((8, 0, configs[0][0]),), os._exit, (3,), "prbdm", {"beam_seed": 0})
+    beam = Task("beam", ((8, 1, configs[0][0]),), run_prbdm_beam, (shared, 8, 1, configs),
+                "prbdm")
+    store = tmp_path / "s.db"
+    with ResultStore(store) as s:
+        summary = run_tasks(s, [killer, beam], planned=2, skipped=0, workers=2,
+                            progress=False)
+        rows = {r.item: r for r in s.rows()}
+    assert (summary.tasks, summary.ok, summary.failed) == (2, 1, 1)
+    assert rows[0].status == "failed" and rows[0].error.startswith("worker: KilledWorker")
+    assert rows[1].status == "ok"

@@ -240,7 +240,7 @@ def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
     """
     from pinflex.config import run_config
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     row = {"seed": 0, "item": 0, "config_hash": chash, "kind": KIND, "status": "failed",
            "error": None, "params": {"case": case, "overrides": overrides}, "truth": None,
            "result": None, "metrics": {}, "worker": _worker_address()}
@@ -274,4 +274,5 @@ def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
         row["error"] = _error_text("assign", exc)
         row["timings"] = {}
     row["timings"]["task_s"] = time.perf_counter() - t0
+    row["timings"]["task_cpu_s"] = time.process_time() - c0
     return [row]
