@@ -247,3 +247,24 @@ def test_a_task_that_kills_its_workers_is_recorded_once(tmp_path):
     assert (summary.tasks, summary.ok, summary.failed) == (2, 1, 1)
     assert rows[0].status == "failed" and rows[0].error.startswith("worker: KilledWorker")
     assert rows[1].status == "ok"
+
+
+def test_progress_bar_reports_rate_and_eta():
+    """The bar shows done/total, percent, a rate and an ETA that reaches zero at the end."""
+    import io
+
+    from pinflex.batch.runner import ProgressBar
+
+    stream = io.StringIO()
+    bar = ProgressBar(4, "beams", stream=stream, log_interval_s=0.0)
+    bar.start -= 8.0  # as if the run had started 8 s ago
+    bar.update()
+    first = stream.getvalue().splitlines()[-1]
+    assert "1/4" in first and " 25%" in first and "/s ETA 00:2" in first  # about 24 s left
+    for _ in range(3):
+        bar.update(failed=1)
+    last = stream.getvalue().splitlines()[-1]
+    assert "4/4 100%" in last and "ETA 00:00" in last and "3 failed" in last
+    lines = len(stream.getvalue().splitlines())
+    bar.close()
+    assert len(stream.getvalue().splitlines()) == lines  # the final line is drawn once

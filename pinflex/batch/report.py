@@ -162,7 +162,7 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
     Args:
         path: The store.
         out_dir: Output folder; default the store's path without suffix + ``-report``.
-        bins: Histogram bins.
+        bins: Most histogram bins (fewer for few rows).
 
     Returns:
         The written files.
@@ -188,7 +188,8 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
             if positive.size == 0:
                 continue
             fig, ax = plt.subplots(figsize=(6.0, 3.6))
-            ax.hist(np.log10(positive), bins=bins, color="tab:blue", alpha=0.8)
+            n_bins = min(bins, max(5, 2 * int(np.sqrt(positive.size))))
+            ax.hist(np.log10(positive), bins=n_bins, color="tab:blue", alpha=0.8)
             ax.axvline(np.log10(np.median(positive)), color="k", lw=1,
                        label=f"median {100 * np.median(positive):.3g} %")
             ax.set_xlabel(f"log10 {metric} [-]")
