@@ -40,7 +40,7 @@ def test_config_hash_covers_settings_but_not_study_size():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    ({"links": (2,), "modes": (3,)}, "has 2 modes"),
+    ({"links": (2,), "modes": (3,)}, "2R model has 2 modes"),
     ({"links": (2, 3), "modes": (2, 2, 2)}, "one value per --links"),
     ({"links": (4,), "truth_modes": 3}, "--truth-modes 3"),
     ({"objective": "pareto", "alphas": ()}, "needs deflection loads"),

@@ -107,7 +107,7 @@ class PrbdmStudy:
                              f"{list(links)} (or a single value)")
         for n, m in zip(links, modes):
             if not 1 <= m <= n:
-                raise BatchError(f"an {n}R model has {n} modes; --modes asks for {m}")
+                raise BatchError(f"the {n}R model has {n} modes; --modes asks for {m}")
         if max(modes) > self.truth_modes:
             raise BatchError(f"--truth-modes {self.truth_modes} is below the {max(modes)} "
                              "matched modes; raise it")
