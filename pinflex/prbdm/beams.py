@@ -1,4 +1,4 @@
-"""Beam planforms for pseudo-rigid-body dynamic models (paper 001, Sec. 2.1).
+r"""Beam planforms for pseudo-rigid-body dynamic models (paper 001, Sec. 2.1).
 
 A planform is a polygon symmetric about the beam axis X, extruded to a uniform thickness
 ``t`` along Z. The beam bends out of plane (about the width axis Y), so the bending second
@@ -8,7 +8,7 @@ moment of area of a cross-section is :math:`I(x) = w(x) t^3 / 12` and its area
 Modelling choice (recorded here because the paper leaves it open): the planform is treated as
 a 1D Euler-Bernoulli beam. Random planforms can be nearly as wide as they are long and can pinch
 to a near-hinge; plate effects (anticlastic curvature, the plate modulus
-:math:`E/(1-\\nu^2)`), shear deformation and torsion are not modelled. Symmetry about X means
+:math:`E/(1-\nu^2)`), shear deformation and torsion are not modelled. Symmetry about X means
 bending does not couple to torsion.
 
 Random planforms follow Sec. 2.1: ``p`` sorted uniform abscissae in (0, 1) with 0 and 1
@@ -334,10 +334,10 @@ def segment_properties(planform: Planform, start_m: float, end_m: float) -> Segm
 
 
 def equivalent_bending_stiffness(planform: Planform) -> float:
-    """Uniform EI with the same linear tip compliance under a transverse tip force [N m^2].
+    r"""Uniform EI with the same linear tip compliance under a transverse tip force [N m^2].
 
-    :math:`EI_{eq} = L^3 / (3 \\int_0^L (L - x)^2 / EI(x)\\, dx)`; equal to EI for a uniform beam.
-    It scales tip loads of non-uniform beams: :math:`\\alpha = P L^2 / EI_{eq}`.
+    :math:`EI_{eq} = L^3 / (3 \int_0^L (L - x)^2 / EI(x)\, dx)`; equal to EI for a uniform beam.
+    It scales tip loads of non-uniform beams: :math:`\alpha = P L^2 / EI_{eq}`.
     """
     length = planform.length_m
     x1, x2 = planform.x_m[:-1], planform.x_m[1:]

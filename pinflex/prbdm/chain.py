@@ -1,16 +1,16 @@
-"""The (n+1)-link / nR pseudo-rigid-body chain as a Pinocchio model (paper 001, eq. 1-9).
+r"""The (n+1)-link / nR pseudo-rigid-body chain as a Pinocchio model (paper 001, eq. 1-9).
 
-Link 0 (length :math:`\\gamma_0 L`) is clamped to the ground along +X. Joints 1..n are revolute
+Link 0 (length :math:`\gamma_0 L`) is clamped to the ground along +X. Joints 1..n are revolute
 about +Y (the beam's width axis, so the chain moves in the X-Z plane as the beam bends out of
-plane), joint j sitting at :math:`s_j = L\\sum_{i<j}\\gamma_i`; link j spans
-:math:`[s_j, s_j + \\gamma_j L]` and carries the mass, centre of mass and rotational inertia of
+plane), joint j sitting at :math:`s_j = L\sum_{i<j}\gamma_i`; link j spans
+:math:`[s_j, s_j + \gamma_j L]` and carries the mass, centre of mass and rotational inertia of
 that stretch of the planform. A positive joint angle turns the chain from +X towards -Z.
-Springs are diagonal, :math:`\\tau = -K\\theta` (eq. 12). Pinocchio supplies the mass matrix
+Springs are diagonal, :math:`\tau = -K\theta` (eq. 12). Pinocchio supplies the mass matrix
 (CRBA), forward kinematics and the tip frame Jacobian; everything else is small numpy code.
 
-Paper 001 avoids :math:`\\theta = 0` claiming the mass matrix is singular there. For a chain whose
-links all have positive mass and rotational inertia, :math:`M(\\theta)` is positive definite at
-every pose, including :math:`\\theta = 0`; what loses rank at :math:`\\theta = 0` is the tip
+Paper 001 avoids :math:`\theta = 0` claiming the mass matrix is singular there. For a chain whose
+links all have positive mass and rotational inertia, :math:`M(\theta)` is positive definite at
+every pose, including :math:`\theta = 0`; what loses rank at :math:`\theta = 0` is the tip
 *Jacobian* (all joints collinear, no axial tip velocity). See :func:`mass_matrix_condition`.
 """
 
@@ -153,9 +153,9 @@ def mass_matrix(chain: PrbdmChain, theta: np.ndarray | None = None,
 
 def chain_frequencies(chain: PrbdmChain, theta: np.ndarray | None = None,
                       data: pin.Data | None = None) -> np.ndarray:
-    """Eigenfrequencies of small oscillations about pose theta, ascending, shape (n,) [Hz].
+    r"""Eigenfrequencies of small oscillations about pose theta, ascending, shape (n,) [Hz].
 
-    Solves the symmetric generalized problem :math:`K\\phi = \\omega^2 M(\\theta)\\phi` with
+    Solves the symmetric generalized problem :math:`K\phi = \omega^2 M(\theta)\phi` with
     ``scipy.linalg.eigh`` (M is positive definite at every pose; no pseudo-inverse).
     """
     m = mass_matrix(chain, theta, data)
@@ -193,13 +193,13 @@ def mass_matrix_condition(chain: PrbdmChain, poses: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class StaticsResult:
-    """Equilibrium of the chain under a dead tip force.
+    r"""Equilibrium of the chain under a dead tip force.
 
     Attributes:
         theta: Joint angles, shape (n,) [rad].
         tip_m: Tip position (x, z) [m].
         iterations: Newton iterations summed over load steps.
-        residual_nm: Final residual norm :math:`\\|K\\theta - J^T F\\|` [N m].
+        residual_nm: Final residual norm :math:`\|K\theta - J^T F\|` [N m].
     """
 
     theta: np.ndarray
@@ -229,10 +229,10 @@ def _statics_terms(chain: PrbdmChain, data: pin.Data, theta: np.ndarray, force: 
 def solve_tip_statics(chain: PrbdmChain, force_n: np.ndarray, theta0: np.ndarray | None = None,
                       load_steps: int = 1, max_iter: int = 30, tol: float = 1e-10,
                       data: pin.Data | None = None) -> StaticsResult:
-    """Solve :math:`K\\theta = J^T(\\theta) F` (eq. 8) by Newton's method for a dead tip force.
+    r"""Solve :math:`K\theta = J^T(\theta) F` (eq. 8) by Newton's method for a dead tip force.
 
     The load is applied in ``load_steps`` equal increments, each solved by full Newton with
-    the exact tangent :math:`K - \\partial(J^T F)/\\partial\\theta`. An answer is returned only if
+    the exact tangent :math:`K - \partial(J^T F)/\partial\theta`. An answer is returned only if
     it is (1) converged, (2) a stable equilibrium (tangent positive definite) and (3) on the
     physical branch: for a dead tip force every link's absolute angle lies between the
     undeformed axis and the force direction (as the elastica's section rotation does). Anything
@@ -244,7 +244,7 @@ def solve_tip_statics(chain: PrbdmChain, force_n: np.ndarray, theta0: np.ndarray
         theta0: Starting joint angles [rad]; default zeros (start of the first load step).
         load_steps: Number of equal load increments.
         max_iter: Newton iterations allowed per load step.
-        tol: Convergence tolerance on the residual relative to :math:`\\|K\\theta\\| + \\|J^TF\\|`.
+        tol: Convergence tolerance on the residual relative to :math:`\|K\theta\| + \|J^TF\|`.
         data: Optional Pinocchio data to reuse.
 
     Returns:

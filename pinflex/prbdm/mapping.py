@@ -45,7 +45,7 @@ OBJECTIVES = ("eigen", "deflection", "combined", "pareto")
 
 @dataclass(frozen=True)
 class PrbdmFit:
-    """Result of a PRBDM mapping.
+    r"""Result of a PRBDM mapping.
 
     Attributes:
         beam: Beam label.
@@ -53,7 +53,7 @@ class PrbdmFit:
         n_modes: Number of matched modes.
         objective: Objective that was minimised.
         stiffness_law: ``"segment"`` or ``"paper"``.
-        link_fractions: Link-length fractions :math:`\\gamma` of links 0..n, (n + 1,) [-].
+        link_fractions: Link-length fractions :math:`\gamma` of links 0..n, (n + 1,) [-].
         link_lengths_m: Link lengths, (n + 1,) [m].
         stiffness: Static spring stiffness of joints 1..n, (n,) [N m/rad].
         correction_factors: Stiffness correction factors (per joint or per pose) [-].
@@ -62,7 +62,7 @@ class PrbdmFit:
         eigen_error: RMS relative frequency error over poses [-].
         deflection_error: RMS displacement-normalised tip error over loads [-].
         deflection_error_position: Same, normalised by the tip position (eq. 19) [-].
-        combined_error: :math:`\\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
+        combined_error: :math:`\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
         pose_errors: Relative frequency error per pose, (m,) [-].
         load_errors: Displacement-normalised tip error per load, (l,) [-].
         alphas: Load levels :math:`PL^2/EI_{eq}`, (l,) [-].
@@ -150,7 +150,7 @@ def _weights(problem: MappingProblem, kind: str, weight: float | None) -> tuple[
 
 
 def _residual_function(problem: MappingProblem, kind: str, weight: float | None = None):
-    """Residuals r(x) with :math:`\|r\|^2 = w_e e_{eig}^2 + w_d e_{defl}^2` plus a gauge term.
+    r"""Residuals r(x) with :math:`\|r\|^2 = w_e e_{eig}^2 + w_d e_{defl}^2` plus a gauge term.
 
     The losses only see the normalised fractions :math:`\gamma/\sum\gamma`, so the residual
     :math:`\sum\gamma - 1` pins the scale and enforces eq. (15b).

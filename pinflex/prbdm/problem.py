@@ -1,29 +1,29 @@
-"""PRBDM mapping problem: truth data, parameterisation and losses (paper 001, eq. 10-19, 27).
+r"""PRBDM mapping problem: truth data, parameterisation and losses (paper 001, eq. 10-19, 27).
 
-Design variables are the link-length fractions :math:`\\gamma` (links 0..n, on the simplex,
+Design variables are the link-length fractions :math:`\gamma` (links 0..n, on the simplex,
 each >= 0.02, eq. 15) and stiffness correction factors, stored as logarithms. Two stiffness
 laws are offered:
 
-* ``"paper"`` (eq. 14): :math:`K_j(i) = k_i \\sqrt{E I_j / \\hat m_j}`, one factor :math:`k_i` per
-  pose i, :math:`I_j` the mean second moment of area and :math:`\\hat m_j` the mass of link j.
+* ``"paper"`` (eq. 14): :math:`K_j(i) = k_i \sqrt{E I_j / \hat m_j}`, one factor :math:`k_i` per
+  pose i, :math:`I_j` the mean second moment of area and :math:`\hat m_j` the mass of link j.
   Tip statics use the mean factor (eq. 25), the paper leaving this open.
-* ``"segment"`` (pinflex default): :math:`K_j = c_j / \\int_{piece\\ j} dx / EI(x)`, one factor
+* ``"segment"`` (pinflex default): :math:`K_j = c_j / \int_{piece\ j} dx / EI(x)`, one factor
   per joint, pose independent. Piece j is the stretch of beam that joint j stands for, from the
   middle of link j-1 (the root for j = 1, link 0 being clamped) to the middle of link j (the tip
   for j = n); :math:`c_j = 1` is already a physical spring, so the optimiser only corrects it.
 
 Losses (fractions, not percent):
 
-* eigen: per pose, :math:`\\|f_{truth} - f_{model}(\\theta_i)\\|_2 / \\|f_{truth}\\|_2` on the first
+* eigen: per pose, :math:`\|f_{truth} - f_{model}(\theta_i)\|_2 / \|f_{truth}\|_2` on the first
   ``n_modes`` frequencies in Hz (eq. 16); the loss is the root mean square over poses.
-* deflection: per load, :math:`\\|P_{truth} - P_{model}\\|_2 / \\|P_{truth} - P_0\\|_2` with
+* deflection: per load, :math:`\|P_{truth} - P_{model}\|_2 / \|P_{truth} - P_0\|_2` with
   :math:`P_0` the undeformed tip, i.e. normalised by the tip *displacement*. Eq. (19) normalises by
-  the tip position vector, which is about :math:`L/|\\Delta|` times more lenient; that value is
+  the tip position vector, which is about :math:`L/|\Delta|` times more lenient; that value is
   kept as ``deflection_error_position``. The loss is the root mean square over loads.
-* combined: :math:`\\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27).
+* combined: :math:`\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27).
 
 Loads are dead tip forces perpendicular to the undeformed beam with
-:math:`\\alpha = P L^2 / EI_{eq}` (:func:`~pinflex.prbdm.beams.equivalent_bending_stiffness`).
+:math:`\alpha = P L^2 / EI_{eq}` (:func:`~pinflex.prbdm.beams.equivalent_bending_stiffness`).
 """
 
 from __future__ import annotations
@@ -46,10 +46,10 @@ FAILED_LOAD_ERROR = 1.0
 
 
 def paper_poses(n_joints: int, offset_rad: float = 0.05, step_rad: float = 0.1) -> np.ndarray:
-    """Pose sweep of eq. (10)-(11): all joints at :math:`\\xi + i\\epsilon`, shape (m, n) [rad].
+    r"""Pose sweep of eq. (10)-(11): all joints at :math:`\xi + i\epsilon`, shape (m, n) [rad].
 
-    Poses are added while the end link's world angle :math:`n(\\xi + i\\epsilon)` stays at or
-    below :math:`\\pi/2`.
+    Poses are added while the end link's world angle :math:`n(\xi + i\epsilon)` stays at or
+    below :math:`\pi/2`.
     """
     count = int(np.floor((np.pi / 2 / n_joints - offset_rad) / step_rad + 1e-12)) + 1
     angles = offset_rad + step_rad * np.arange(max(count, 1))
@@ -58,7 +58,7 @@ def paper_poses(n_joints: int, offset_rad: float = 0.05, step_rad: float = 0.1) 
 
 @dataclass(frozen=True)
 class MappingProblem:
-    """Truth data and settings of one PRBDM mapping.
+    r"""Truth data and settings of one PRBDM mapping.
 
     Attributes:
         planform: The beam.
@@ -69,7 +69,7 @@ class MappingProblem:
         forces_n: Tip forces (Fx, Fz), shape (l, 2) [N].
         truth_tips_m: Elastica tip positions (x, z), shape (l, 2) [m].
         stiffness_law: ``"segment"`` or ``"paper"``.
-        alphas: Load levels :math:`\\alpha = PL^2/EI_{eq}`, shape (l,).
+        alphas: Load levels :math:`\alpha = PL^2/EI_{eq}`, shape (l,).
     """
 
     planform: Planform
@@ -113,12 +113,12 @@ class TruthData:
 
 def compute_truth(planform: Planform, n_modes: int = 5,
                   alphas: tuple[float, ...] = DEFAULT_ALPHAS) -> TruthData:
-    """Converged beam frequencies and elastica tips under transverse dead loads.
+    r"""Converged beam frequencies and elastica tips under transverse dead loads.
 
     Args:
         planform: The beam.
         n_modes: Number of bending modes.
-        alphas: Load levels :math:`\\alpha = PL^2/EI_{eq}` (downward tip force).
+        alphas: Load levels :math:`\alpha = PL^2/EI_{eq}` (downward tip force).
     """
     modes = beam_frequencies(planform, n_modes)
     ei = equivalent_bending_stiffness(planform)
@@ -194,13 +194,13 @@ def reference_stiffness(problem: MappingProblem, gamma: np.ndarray) -> np.ndarra
 
 @dataclass(frozen=True)
 class Evaluation:
-    """Losses of one design.
+    r"""Losses of one design.
 
     Attributes:
         eigen_error: RMS over poses of the relative frequency error [-].
         deflection_error: RMS over loads of the displacement-normalised tip error [-].
         deflection_error_position: Same, normalised by the tip position vector (eq. 19) [-].
-        combined_error: :math:`\\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
+        combined_error: :math:`\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
         pose_errors: Relative frequency error per pose, shape (m,).
         load_errors: Displacement-normalised tip error per load, shape (l,).
         model_hz: Chain frequencies at each pose, shape (m, n_modes) [Hz].

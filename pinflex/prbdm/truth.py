@@ -1,4 +1,4 @@
-"""Reference ("truth") solutions for a non-uniform cantilever beam.
+r"""Reference ("truth") solutions for a non-uniform cantilever beam.
 
 Two independent references replace paper 001's COMSOL runs:
 
@@ -8,11 +8,11 @@ Two independent references replace paper 001's COMSOL runs:
 * **Large tip deflection** from the geometrically exact planar elastica under a tip force of
   fixed direction (a dead load), solved by shooting on the root bending moment.
 
-Conditioning (SPEC Sec. 7): the direct generalized problem :math:`K\\phi = \\lambda M\\phi` loses
+Conditioning (SPEC Sec. 7): the direct generalized problem :math:`K\phi = \lambda M\phi` loses
 digits as elements are added, because a symmetric eigensolver's absolute error is about
-:math:`\\varepsilon\\,\\lambda_{max}` and :math:`\\lambda_{max}/\\lambda_1 \\sim N^4`. pinflex solves the
-*compliance* form :math:`M\\phi = \\mu K\\phi`, :math:`\\mu = 1/\\lambda`, where the wanted low modes
-are the largest :math:`\\mu` and are computed to about :math:`\\varepsilon\\,\\mu_1/\\mu_k`; it keeps
+:math:`\varepsilon\,\lambda_{max}` and :math:`\lambda_{max}/\lambda_1 \sim N^4`. pinflex solves the
+*compliance* form :math:`M\phi = \mu K\phi`, :math:`\mu = 1/\lambda`, where the wanted low modes
+are the largest :math:`\mu` and are computed to about :math:`\varepsilon\,\mu_1/\mu_k`; it keeps
 meshes moderate and removes the :math:`h^4` discretisation error by Richardson extrapolation on
 three nested meshes, whose two extrapolants must agree (a built-in convergence check).
 """
@@ -48,7 +48,7 @@ def _hermite_shapes(xi: np.ndarray, h: np.ndarray):
 
 def beam_mesh(planform: Planform, max_element_m: float, max_stiffness_ratio: float = 1.5,
               refine: int = 1) -> np.ndarray:
-    """Graded mesh with every planform vertex a node [m].
+    r"""Graded mesh with every planform vertex a node [m].
 
     In each planform piece the nodes are equally spaced in
     :math:`g(x) = (x - x_1)/h_{max} + |\ln(EI(x)/EI(x_1))| / \ln r_{max}`, so no element is
@@ -155,7 +155,7 @@ def assemble_beam(planform: Planform, nodes_m: np.ndarray) -> tuple[np.ndarray, 
 
 
 def relative_compliance_matrix(planform: Planform, nodes_m: np.ndarray) -> np.ndarray:
-    """Mass matrix in energy-normalised relative (element-deformation) coordinates.
+    r"""Mass matrix in energy-normalised relative (element-deformation) coordinates.
 
     Each element's deformation relative to the rigid motion of its left node,
     :math:`d_e = (w_{e+1} - w_e - h_e w'_e,\ w'_{e+1} - w'_e)`, enters the strain energy only
@@ -192,7 +192,7 @@ def relative_compliance_matrix(planform: Planform, nodes_m: np.ndarray) -> np.nd
 
 def fe_eigenvalues(planform: Planform, nodes_m: np.ndarray, n_modes: int,
                    formulation: str = "relative") -> np.ndarray:
-    """Lowest bending eigenvalues of one Hermite mesh, without extrapolation.
+    r"""Lowest bending eigenvalues of one Hermite mesh, without extrapolation.
 
     Args:
         planform: The beam.
@@ -230,11 +230,11 @@ def fe_eigenvalues(planform: Planform, nodes_m: np.ndarray, n_modes: int,
 
 @dataclass(frozen=True)
 class BeamModes:
-    """Converged bending frequencies of a cantilever beam.
+    r"""Converged bending frequencies of a cantilever beam.
 
     Attributes:
         freq_hz: Extrapolated frequencies, shape (n_modes,) [Hz].
-        eigval: Extrapolated eigenvalues :math:`\\omega^2`, shape (n_modes,) [rad^2/s^2].
+        eigval: Extrapolated eigenvalues :math:`\omega^2`, shape (n_modes,) [rad^2/s^2].
         mesh_eigval: Raw eigenvalues on the three nested meshes, shape (3, n_modes).
         n_elements: Element counts of the three meshes.
         observed_order: Observed convergence order per mode from the three meshes (about 4).
@@ -253,10 +253,10 @@ class BeamModes:
 def beam_frequencies(planform: Planform, n_modes: int = 5, max_element_m: float | None = None,
                      max_stiffness_ratio: float = 1.5, formulation: str = "relative",
                      rtol: float = 1e-7) -> BeamModes:
-    """Converged out-of-plane bending frequencies of the clamped-free beam.
+    r"""Converged out-of-plane bending frequencies of the clamped-free beam.
 
     Three nested meshes (N, 2N, 4N elements, each planform piece halved) give two Richardson
-    extrapolants :math:`(16\\lambda_{2h} - \\lambda_h)/15`; the finer one is returned, and the
+    extrapolants :math:`(16\lambda_{2h} - \lambda_h)/15`; the finer one is returned, and the
     relative gap between them must stay below ``rtol``. Meshes come from :func:`beam_mesh`.
 
     Args:
@@ -345,11 +345,11 @@ def _integrate_elastica(planform: Planform, force: np.ndarray, root_moment: floa
 
 
 def elastica_tip(planform: Planform, force_n: np.ndarray, rtol: float = 1e-11) -> ElasticaSolution:
-    """Geometrically exact planar elastica of the cantilever under a dead tip force.
+    r"""Geometrically exact planar elastica of the cantilever under a dead tip force.
 
     Equations along the arc length s (x along the beam, z transverse, phi the section rotation
-    about +Y so that :math:`z' = -\\sin\\phi`): :math:`x' = \\cos\\phi`,
-    :math:`\\phi' = M / EI(s)`, :math:`M' = F_x \\sin\\phi + F_z \\cos\\phi`, with the beam clamped at
+    about +Y so that :math:`z' = -\sin\phi`): :math:`x' = \cos\phi`,
+    :math:`\phi' = M / EI(s)`, :math:`M' = F_x \sin\phi + F_z \cos\phi`, with the beam clamped at
     s = 0 and :math:`M(L) = 0`. The unknown root moment is found by bracketing and Brent's method
     around the linear estimate :math:`-F_z L`, integrating piecewise between planform vertices.
 

@@ -1,0 +1,133 @@
+"""Tests of pinflex.prbdm.truth: converged beam frequencies and the elastica."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from pinflex.exceptions import InvalidBeam, TruthNotConverged
+from pinflex.prbdm.beams import equivalent_bending_stiffness, random_beam, uniform_beam
+from pinflex.prbdm.truth import beam_frequencies, beam_mesh, elastica_tip, fe_eigenvalues
+
+BETA_L = np.array([1.875104, 4.694091, 7.854757, 10.995541, 14.137168])
+MATTIASSON = [(1.0, 0.30172, 0.05643), (2.0, 0.49346, 0.16064), (5.0, 0.71379, 0.38763),
+              (10.0, 0.81061, 0.55500)]
+
+
+def _uniform_reference_hz():
+    beam = uniform_beam()
+    ei = 205e9 * float(beam.area_moment_m4(0.0))
+    rho_a = 7850.0 * float(beam.area_m2(0.0))
+    return beam, ei, BETA_L**2 * np.sqrt(ei / rho_a) / (2.0 * np.pi)
+
+
+def _shooting_hz(beam, guesses_hz):
+    """Independent reference: shoot the ODE (EI w'')'' = omega^2 rho A w, clamped-free."""
+    e, rho = beam.material.youngs_modulus_pa, beam.material.density_kg_m3
+    ei0 = e * float(beam.area_moment_m4(0.0))
+
+    def det(omega):
+        def rhs(s, y):
+            y = y.reshape(4, 2)
+            return np.concatenate([y[1], y[2] / (e * beam.area_moment_m4(s)), y[3],
+                                   omega**2 * rho * beam.area_m2(s) * y[0]])
+
+        y = np.array([0, 0, 0, 0, ei0, 0, 0, ei0], dtype=float)
+        for a, b in zip(beam.x_m[:-1], beam.x_m[1:]):
+            y = solve_ivp(rhs, (a, b), y, method="DOP853", rtol=1e-12, atol=1e-14).y[:, -1]
+        y = y.reshape(4, 2)
+        return y[2, 0] * y[3, 1] - y[2, 1] * y[3, 0]
+
+    return np.array([brentq(det, 2 * np.pi * f * (1 - 2e-3), 2 * np.pi * f * (1 + 2e-3),
+                            xtol=1e-12 * f) / (2 * np.pi) for f in guesses_hz])
+
+
+def test_uniform_frequencies_match_beta_l_roots():
+    """Converged FE frequencies of the uniform beam are within 1e-6 of the beta-L closed form."""
+    beam, _, exact = _uniform_reference_hz()
+    modes = beam_frequencies(beam, 5)
+    assert np.max(np.abs(modes.freq_hz / exact - 1.0)) < 1e-6
+
+
+def test_hermite_eigenvalues_converge_at_fourth_order():
+    """Halving the elements divides the eigenvalue error by about 16 (observed order 4)."""
+    modes = beam_frequencies(uniform_beam(), 5)
+    assert modes.observed_order[1:] == pytest.approx(4.0, abs=0.05)
+
+
+def test_direct_formulation_loses_digits_as_mesh_grows():
+    """K phi = lambda M phi loses accuracy on refinement; relative coordinates do not."""
+    beam, _, exact = _uniform_reference_hz()
+
+    def err(n_el, form):
+        lam = fe_eigenvalues(beam, np.linspace(0.0, 1.0, n_el + 1), 1, form)[0]
+        return abs(np.sqrt(lam) / (2 * np.pi) / exact[0] - 1.0)
+
+    assert err(50, "stiffness") < 2e-7
+    assert err(800, "stiffness") > 1e-4
+    assert err(800, "stiffness") > 100 * err(50, "stiffness")
+    assert err(800, "relative") < 2e-7
+
+
+def test_round_off_dominated_mesh_is_detected():
+    """A fine mesh with the direct formulation fails the extrapolation check with a named error."""
+    with pytest.raises(TruthNotConverged, match="not converged"):
+        beam_frequencies(uniform_beam(), 5, max_element_m=1 / 200, formulation="stiffness")
+
+
+def test_graded_mesh_keeps_vertices_and_bounds_stiffness_ratio():
+    """Mesh nodes include every vertex, and EI varies by at most the allowed ratio per element."""
+    beam = random_beam(0)
+    nodes = beam_mesh(beam, 1 / 32, max_stiffness_ratio=1.5)
+    assert np.all(np.isin(beam.x_m, nodes))
+    inertia = beam.area_moment_m4(nodes)
+    ratio = np.maximum(inertia[1:] / inertia[:-1], inertia[:-1] / inertia[1:])
+    assert ratio.max() <= 1.5 + 1e-9
+    assert np.diff(nodes).max() <= 1 / 32 + 1e-12
+
+
+def test_random_beam_frequencies_match_ode_shooting():
+    """On a random planform, FE frequencies agree with an independent ODE shooting solution."""
+    beam = random_beam(7)
+    modes = beam_frequencies(beam, 3)
+    assert modes.rel_error_estimate.max() < 1e-7
+    reference = _shooting_hz(beam, modes.freq_hz)
+    assert np.max(np.abs(modes.freq_hz / reference - 1.0)) < 1e-8
+
+
+def test_pinched_random_beam_converges_at_fourth_order():
+    """Graded meshes keep fourth-order convergence on a planform that pinches to a near-hinge."""
+    beam = random_beam(0)
+    assert beam.half_width_m.min() < 0.002
+    modes = beam_frequencies(beam, 5)
+    assert modes.observed_order == pytest.approx(4.0, abs=0.1)
+
+
+@pytest.mark.parametrize("alpha, w_ref, u_ref", MATTIASSON)
+def test_elastica_matches_mattiasson_table(alpha, w_ref, u_ref):
+    """Elastica tip deflection and shortening equal Mattiasson's table to its printed digits."""
+    beam, ei, _ = _uniform_reference_hz()
+    sol = elastica_tip(beam, np.array([0.0, -alpha * ei]))
+    assert round(-sol.tip_m[1], 5) == pytest.approx(w_ref, abs=1e-12)
+    assert round(1.0 - sol.tip_m[0], 5) == pytest.approx(u_ref, abs=1e-12)
+
+
+def test_elastica_tip_rotation_at_alpha_one():
+    """The tip rotation at alpha = 1 is 0.46135 rad."""
+    beam, ei, _ = _uniform_reference_hz()
+    assert round(elastica_tip(beam, np.array([0.0, -ei])).tip_rotation_rad, 5) == 0.46135
+
+
+def test_elastica_small_load_matches_linear_theory_on_random_beam():
+    """For a tiny load the elastica tip deflection equals P L^3 / (3 EI_eq)."""
+    beam = random_beam(4)
+    force = 1e-5 * equivalent_bending_stiffness(beam)
+    sol = elastica_tip(beam, np.array([0.0, -force]))
+    linear = force / (3.0 * equivalent_bending_stiffness(beam))
+    assert -sol.tip_m[1] == pytest.approx(linear, rel=1e-4)
+
+
+def test_elastica_rejects_bad_force():
+    """A force that is not a finite 2-vector raises InvalidBeam."""
+    with pytest.raises(InvalidBeam, match="force_n"):
+        elastica_tip(uniform_beam(), np.array([0.0, np.inf]))
