@@ -312,6 +312,11 @@ def _check_branch(chain: PrbdmChain, theta: np.ndarray, tangent: np.ndarray, for
             f"(now {load_steps})")
 
 
+def _num(value) -> str:
+    """Shortest round-trip text of a number for URDF attributes."""
+    return repr(float(value))
+
+
 def to_urdf(chain: PrbdmChain, name: str = "prbdm") -> str:
     """URDF text of the chain; spring stiffnesses ride in ``<pinflex_spring>`` joint children.
 
@@ -330,26 +335,27 @@ def to_urdf(chain: PrbdmChain, name: str = "prbdm") -> str:
         lines += [
             f'  <link name="link_{j}">',
             "    <inertial>",
-            f'      <origin xyz="{com[0]!r} {com[1]!r} {com[2]!r}" rpy="0 0 0"/>',
-            f'      <mass value="{inertia.mass!r}"/>',
-            f'      <inertia ixx="{rot[0, 0]!r}" ixy="0" ixz="0" iyy="{rot[1, 1]!r}" iyz="0" '
-            f'izz="{rot[2, 2]!r}"/>',
+            f'      <origin xyz="{_num(com[0])} {_num(com[1])} {_num(com[2])}" rpy="0 0 0"/>',
+            f'      <mass value="{_num(inertia.mass)}"/>',
+            f'      <inertia ixx="{_num(rot[0, 0])}" ixy="0" ixz="0" '
+            f'iyy="{_num(rot[1, 1])}" iyz="0" izz="{_num(rot[2, 2])}"/>',
             "    </inertial>",
             "  </link>",
             f'  <joint name="{model.names[j]}" type="revolute">',
             f'    <parent link="{parent}"/>',
             f'    <child link="link_{j}"/>',
-            f'    <origin xyz="{origin[0]!r} {origin[1]!r} {origin[2]!r}" rpy="0 0 0"/>',
+            f'    <origin xyz="{_num(origin[0])} {_num(origin[1])} {_num(origin[2])}" '
+            'rpy="0 0 0"/>',
             '    <axis xyz="0 1 0"/>',
             '    <limit lower="-3.14159" upper="3.14159" effort="1e9" velocity="1e3"/>',
             '    <dynamics damping="0" friction="0"/>',
-            f'    <pinflex_spring stiffness="{chain.stiffness_nm_rad[j - 1]!r}"/>',
+            f'    <pinflex_spring stiffness="{_num(chain.stiffness_nm_rad[j - 1])}"/>',
             "  </joint>",
         ]
     tip = model.frames[chain.tip_frame_id].placement.translation
     n = model.njoints - 1
     lines += ['  <link name="tip"/>', '  <joint name="tip_joint" type="fixed">',
               f'    <parent link="link_{n}"/>', '    <child link="tip"/>',
-              f'    <origin xyz="{tip[0]!r} {tip[1]!r} {tip[2]!r}" rpy="0 0 0"/>',
+              f'    <origin xyz="{_num(tip[0])} {_num(tip[1])} {_num(tip[2])}" rpy="0 0 0"/>',
               "  </joint>", "</robot>", ""]
     return "\n".join(lines)

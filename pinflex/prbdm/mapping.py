@@ -261,7 +261,8 @@ def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.
     starting from both anchors and from the previous front point; dominated points are
     dropped. (A weighted sum finds the convex hull of the front; the anchors close its ends.)
     """
-    points = [(eigen_x, evaluate(problem, eigen_x)), (deflection_x, evaluate(problem, deflection_x))]
+    points = [(eigen_x, evaluate(problem, eigen_x)),
+              (deflection_x, evaluate(problem, deflection_x))]
     bar = ProgressBar(n_points, f"{problem.n_joints}R pareto", progress)
     previous = eigen_x
     for weight in np.linspace(1.0, 0.0, n_points + 2)[1:-1]:
