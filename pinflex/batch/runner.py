@@ -236,8 +236,9 @@ def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: 
         retry_failed: Whether a new row may replace a stored failure.
         progress: Show the progress bar on stderr.
         label: Progress-bar label.
-        max_in_flight: Most tasks submitted at once; default four per worker thread (and at
-            least 16), which keeps workers busy and the client's memory bounded.
+        max_in_flight: Most tasks submitted at once; default four per worker thread of the
+            cluster (and at least 16), rechecked every 5 s as workers join or leave, which
+            keeps workers busy and the client's memory bounded.
         preload: Modules every worker imports before the clock starts (so the first tasks'
             imports do not count in the rate).
 
@@ -255,23 +256,35 @@ def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: 
     try:
         if preload:
             client.run(_import_modules, tuple(preload))
-        threads = sum(client.nthreads().values())
-        summary.workers = threads
-        limit = max_in_flight or max(16, 4 * threads)
         token = uuid.uuid4().hex[:8]
         queue = list(tasks)[::-1]
-        owner = {}
+        owner: dict = {}
+        checked = -np.inf
+        limit = 16
 
-        def submit():
-            task = queue.pop()
-            future = client.submit(task.func, *task.args, key=f"{task.name}-{token}",
-                                   pure=False, retries=0)
-            owner[future.key] = task
-            return future
+        def refresh_limit() -> None:
+            """Follow the cluster's size (workers may join later), at most every 5 s."""
+            nonlocal checked, limit
+            if time.perf_counter() - checked < 5.0:
+                return
+            checked = time.perf_counter()
+            threads = sum(client.nthreads().values())
+            summary.workers = max(summary.workers, threads)
+            limit = max_in_flight or max(16, 4 * threads)
+
+        def top_up(pending) -> None:
+            refresh_limit()
+            while queue and len(owner) < limit:
+                task = queue.pop()
+                future = client.submit(task.func, *task.args, key=f"{task.name}-{token}",
+                                       pure=False, retries=0)
+                owner[future.key] = task
+                pending.add(future)
 
         bar = ProgressBar(len(tasks), label, progress)
         start = time.perf_counter()
-        pending = as_completed([submit() for _ in range(min(limit, len(queue)))])
+        pending = as_completed()
+        top_up(pending)
         try:
             for future in pending:
                 task = owner.pop(future.key)
@@ -289,8 +302,7 @@ def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: 
                 summary.ok += len(rows) - n_failed
                 _add_stages(stage_sum, rows)
                 bar.update(1, int(n_failed > 0))
-                if queue:
-                    pending.add(submit())
+                top_up(pending)
         except KeyboardInterrupt:
             summary.interrupted = True
         finally:
