@@ -5,8 +5,10 @@ Objectives (losses defined in :mod:`pinflex.prbdm.problem`):
 * ``"eigen"``: frequencies only (eq. 17);
 * ``"deflection"``: tip positions only (eq. 18);
 * ``"combined"``: :math:`e_{eig}^2 + e_{defl}^2`, the squared distance to the origin of eq. 27;
-* ``"pareto"``: both anchors, then a weighted-sum sweep between them, then the front point
-  closest to the origin (eq. 27), compared with a direct multistart of the combined objective.
+* ``"pareto"``: eigen-only multistart; combined searches started from the eigen solutions
+  that deflect best (a homotopy from the frequency-matching manifold); the deflection anchor
+  from there; a weighted-sum sweep between the anchors; the design closest to the origin
+  (eq. 27) is returned.
 
 Each search is a multistart (eq. 23: fractions sampled uniformly on the simplex above the 0.02
 floor as in Smith and Tromble; correction factors scaled so the first frequency matches, then
@@ -228,46 +230,63 @@ def _score(ev: Evaluation, kind: str) -> float:
 
 
 def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int = 0,
-               progress: bool = False) -> tuple[np.ndarray, Evaluation]:
+               progress: bool = False, starts: np.ndarray | None = None,
+               keep_all: bool = False):
     """Best local least-squares solution over multistart points for one objective.
+
+    Args:
+        problem: The mapping problem.
+        kind: ``"eigen"``, ``"deflection"`` or ``"combined"``.
+        n_starts: Number of random start points (eq. 23) when ``starts`` is not given.
+        seed: Seed of the start points.
+        progress: Show a progress bar on stderr.
+        starts: Explicit start designs, shape (k, n_params).
+        keep_all: Return every successful local solution, best first, instead of the best.
+
+    Returns:
+        ``(x, evaluation)`` of the best solution, or the list of all of them.
 
     Raises:
         MappingFailed: If every start fails to produce finite losses.
     """
-    best_x, best_ev, best = None, None, np.inf
-    bar = ProgressBar(n_starts, f"{problem.n_joints}R {kind}", progress)
-    for x0 in start_points(problem, n_starts, seed):
+    points = start_points(problem, n_starts, seed) if starts is None else np.atleast_2d(starts)
+    found = []
+    bar = ProgressBar(len(points), f"{problem.n_joints}R {kind}", progress)
+    for x0 in points:
         try:
             x = _local(problem, kind, x0)
             ev = evaluate(problem, x)
         except (InvalidChain, np.linalg.LinAlgError, ValueError):
-            bar.update(best)
+            bar.update(min((_score(e, kind) for _, e in found), default=np.inf))
             continue
-        score = _score(ev, kind)
-        if np.isfinite(score) and score < best:
-            best_x, best_ev, best = x, ev, score
-        bar.update(best)
-    if best_x is None:
-        raise MappingFailed(f"all {n_starts} starts of the {kind} mapping failed for "
+        if np.isfinite(_score(ev, kind)):
+            found.append((x, ev))
+        bar.update(min((_score(e, kind) for _, e in found), default=np.inf))
+    if not found:
+        raise MappingFailed(f"all {len(points)} starts of the {kind} mapping failed for "
                             f"{problem.n_joints}R; try more starts or another seed")
-    return best_x, best_ev
+    found.sort(key=lambda p: _score(p[1], kind))
+    return found if keep_all else found[0]
 
 
 def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.ndarray,
-                 n_points: int = 7, progress: bool = False) -> list[tuple[np.ndarray, Evaluation]]:
+                 n_points: int = 7, progress: bool = False,
+                 extra: list | None = None) -> list[tuple[np.ndarray, Evaluation]]:
     """Weighted-sum Pareto front between the eigen and deflection anchors.
 
     For weights w evenly spaced in (0, 1), minimise :math:`w e_{eig}^2 + (1 - w) e_{defl}^2`,
-    starting from both anchors and from the previous front point; dominated points are
-    dropped. (A weighted sum finds the convex hull of the front; the anchors close its ends.)
+    starting from the previous front point and from the best ``extra`` design; dominated
+    points are dropped. (A weighted sum finds the convex hull of the front; the anchors close
+    its ends.) ``extra`` designs, as (x, evaluation) pairs, join the front.
     """
     points = [(eigen_x, evaluate(problem, eigen_x)),
-              (deflection_x, evaluate(problem, deflection_x))]
+              (deflection_x, evaluate(problem, deflection_x))] + list(extra or [])
+    hub = min(points, key=lambda p: p[1].combined_error)[0]
     bar = ProgressBar(n_points, f"{problem.n_joints}R pareto", progress)
     previous = eigen_x
     for weight in np.linspace(1.0, 0.0, n_points + 2)[1:-1]:
         best = None
-        for x0 in (previous, eigen_x, deflection_x):
+        for x0 in (previous, hub):
             try:
                 x = _local(problem, "weighted", x0, weight=weight)
             except (InvalidChain, np.linalg.LinAlgError, ValueError):
@@ -301,7 +320,8 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         planform: The beam.
         n_joints: Number of revolute joints n.
         n_modes: Modes to match; default n.
-        objective: ``"eigen"``, ``"deflection"``, ``"combined"`` or ``"pareto"``.
+        objective: ``"eigen"``, ``"deflection"``, ``"combined"`` or ``"pareto"``; the last two
+            start the combined search from the eigen-only solutions.
         stiffness_law: ``"segment"`` (pose-independent physical springs with per-joint factors)
             or ``"paper"`` (eq. 14, per-pose factors).
         poses: Comparison poses for frequencies, see :func:`~pinflex.prbdm.problem.build_problem`.
@@ -313,8 +333,8 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
 
     Returns:
         The fit; for ``"pareto"`` the front is in ``fit.pareto`` and the returned model is the
-        best of the front point closest to the origin (eq. 27), that point polished with the
-        combined objective, and a direct combined multistart.
+        design closest to the origin (eq. 27) among the front and the combined search started
+        from the eigen-only solutions.
 
     Raises:
         InvalidChain: For bad settings.
@@ -324,18 +344,19 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         raise InvalidChain(f"objective = {objective!r}; expected one of {OBJECTIVES}")
     problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth)
     front: list[tuple[np.ndarray, Evaluation]] = []
-    if objective == "pareto":
-        x_e, _ = multistart(problem, "eigen", n_starts, seed, progress)
-        x_d, _ = multistart(problem, "deflection", max(2, n_starts // 2), seed + 1, progress)
-        front = pareto_front(problem, x_e, x_d, pareto_points, progress)
-        x, ev = min(front, key=lambda p: p[1].combined_error)
-        x_pol = _local(problem, "combined", x)
-        ev_pol = evaluate(problem, x_pol)
-        if ev_pol.combined_error < ev.combined_error:
-            x, ev = x_pol, ev_pol
-        x_c, ev_c = multistart(problem, "combined", max(2, n_starts // 2), seed + 2, progress)
-        if ev_c.combined_error < ev.combined_error:
-            x, ev = x_c, ev_c
+    if objective in ("pareto", "combined"):
+        eigen_all = multistart(problem, "eigen", n_starts, seed, progress, keep_all=True)
+        x_e = eigen_all[0][0]
+        # Homotopy from the frequency-matching manifold: the eigen solutions that already
+        # deflect best are the starts of the combined search.
+        seeds = sorted(eigen_all, key=lambda p: p[1].combined_error)[: max(2, n_starts // 2)]
+        x, ev = multistart(problem, "combined", starts=np.array([p[0] for p in seeds]),
+                           progress=progress)
+        if objective == "pareto":
+            x_d, _ = multistart(problem, "deflection", progress=progress,
+                                starts=np.array([x, seeds[0][0]]))
+            front = pareto_front(problem, x_e, x_d, pareto_points, progress, extra=[(x, ev)])
+            x, ev = min(front + [(x, ev)], key=lambda p: p[1].combined_error)
     else:
         x, ev = multistart(problem, objective, n_starts, seed, progress)
     return _make_fit(problem, x, ev, objective, n_starts, front)
