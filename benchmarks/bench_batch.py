@@ -3,13 +3,12 @@
 Run: ``python benchmarks/bench_batch.py [--preset small|paper] [--beams N]``. The same random
 beams are fitted twice into fresh stores, once on one worker process and once on two. Prints
 the throughput [beams/s] of each run (from the first submission to the last stored row, worker
-start-up excluded), the parallel efficiency
-eta = r2 / (2 r1), the per-beam split between the truth (beam FE and elastica) and
-the fits, in wall and CPU seconds, and what the measured CPU time per beam means for paper
-001's 50,000-beam study. The machine's load average is printed before and after: on a shared
-machine the wall-clock numbers (and the efficiency) suffer, the CPU times much less; the share
-of each run's worker-seconds spent computing (task CPU time / (wall time x workers)) says how
-much.
+start-up excluded), the parallel efficiency eta = r2 / (2 r1), the per-beam split between the
+truth (beam FE and elastica) and the fits, in wall and CPU seconds, and what the measured CPU
+time per beam means for paper 001's 50,000-beam study, and the overhead of the client loop per
+task. The machine's load average is printed before and after: on a shared machine the
+wall-clock numbers (and the efficiency) suffer, the CPU times much less; the share of each
+run's worker-seconds spent computing (task CPU time / (wall time x workers)) says how much.
 
 Presets: ``small`` (default) is one 4R model (4 modes, 4 multistarts) per p = 10 beam; ``paper``
 fits the 4R and 5R models of paper 001 (4 and 5 modes, 16 multistarts) to each beam.
@@ -48,6 +47,26 @@ def per_beam_times(path: Path) -> dict[str, float]:
             ("truth_s", "fit_s", "truth_cpu_s", "fit_cpu_s")} | {"beams": len(beams)}
 
 
+def loop_overhead(n_tasks: int = 300) -> float:
+    """Wall time per task of the client loop (submit, collect, store a row) [s].
+
+    Each task returns a ready-made row of about 3 kB (``list([row])`` on the worker), so the
+    time is Dask's round trip plus the SQLite write, with no computation.
+    """
+    from pinflex.batch.runner import Task, run_tasks
+
+    def row(i: int) -> dict:
+        return {"seed": 0, "item": i, "config_hash": "overhead", "kind": "prbdm",
+                "status": "ok", "params": {"x_m": [0.1] * 12}, "result": {"v": [0.5] * 200},
+                "metrics": {"eigen_error": 1e-4}, "timings": {"task_s": 0.0}}
+
+    tasks = [Task(f"noop-{i}", ((0, i, "overhead"),), list, ([row(i)],), "prbdm")
+             for i in range(n_tasks)]
+    with tempfile.TemporaryDirectory() as tmp, ResultStore(Path(tmp) / "o.db") as store:
+        summary = run_tasks(store, tasks, n_tasks, 0, workers=2, progress=False)
+    return summary.wall_s / summary.tasks
+
+
 def main(argv=None) -> None:
     """Run the benchmark."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -84,6 +103,8 @@ def main(argv=None) -> None:
           f"({100 * s['truth_s'] / wall:.0f} %), fit {s['fit_s']:.2f} s "
           f"({100 * s['fit_s'] / wall:.0f} %) wall; truth {s['truth_cpu_s']:.2f} s, fit "
           f"{s['fit_cpu_s']:.2f} s CPU")
+    print(f"client loop overhead: {1e3 * loop_overhead():.1f} ms per task (no-op tasks, "
+          "2 workers)")
     total_h = 50_000 * cpu / 3600
     print(f"paper's 50,000 beams at {cpu:.2f} CPU s per beam: {total_h:.0f} core-hours; "
           f"{total_h / 64:.1f} h on 64 cores, {total_h / 256:.1f} h on 256 cores "
