@@ -61,7 +61,8 @@ class PrbdmFit:
         correction_factors: Stiffness correction factors (per joint or per pose) [-].
         truth_hz: Beam frequencies, (n_modes,) [Hz].
         model_hz: Chain frequencies at the first comparison pose, (n_modes,) [Hz].
-        eigen_error: RMS relative frequency error over poses [-].
+        eigen_error: RMS per-mode relative frequency error over poses and modes [-].
+        eigen_error_eq16: RMS over poses of eq. (16)'s norm-relative error [-].
         deflection_error: RMS displacement-normalised tip error over loads [-].
         deflection_error_position: Same, normalised by the tip position (eq. 19) [-].
         combined_error: :math:`\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
@@ -87,6 +88,7 @@ class PrbdmFit:
     truth_hz: tuple[float, ...]
     model_hz: tuple[float, ...]
     eigen_error: float
+    eigen_error_eq16: float
     deflection_error: float
     deflection_error_position: float
     combined_error: float
@@ -377,6 +379,7 @@ def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective:
         link_lengths_m=tup(gamma * problem.planform.length_m), stiffness=tup(stiffness),
         correction_factors=tup(factors), truth_hz=tup(problem.truth_hz),
         model_hz=tup(ev.model_hz[0]), eigen_error=ev.eigen_error,
+        eigen_error_eq16=ev.eigen_error_eq16,
         deflection_error=ev.deflection_error,
         deflection_error_position=ev.deflection_error_position,
         combined_error=ev.combined_error, pose_errors=tup(ev.pose_errors),

@@ -14,8 +14,10 @@ laws are offered:
 
 Losses (fractions, not percent):
 
-* eigen: per pose, :math:`\|f_{truth} - f_{model}(\theta_i)\|_2 / \|f_{truth}\|_2` on the first
-  ``n_modes`` frequencies in Hz (eq. 16); the loss is the root mean square over poses.
+* eigen: the root mean square, over poses and the first ``n_modes`` modes, of the per-mode
+  relative frequency error :math:`f_{model,k}(\theta_i)/f_{truth,k} - 1`. Eq. (16),
+  :math:`\|f_{truth} - f_{model}\|_2 / \|f_{truth}\|_2`, is dominated by the highest mode and
+  lets a lower mode drift by far more than the loss says; it is kept as ``eigen_error_eq16``.
 * deflection: per load, :math:`\|P_{truth} - P_{model}\|_2 / \|P_{truth} - P_0\|_2` with
   :math:`P_0` the undeformed tip, i.e. normalised by the tip *displacement*. Eq. (19) normalises by
   the tip position vector, which is about :math:`L/|\Delta|` times more lenient; that value is
@@ -197,17 +199,19 @@ class Evaluation:
     r"""Losses of one design.
 
     Attributes:
-        eigen_error: RMS over poses of the relative frequency error [-].
+        eigen_error: RMS over poses and modes of the per-mode relative frequency error [-].
         deflection_error: RMS over loads of the displacement-normalised tip error [-].
         deflection_error_position: Same, normalised by the tip position vector (eq. 19) [-].
         combined_error: :math:`\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
-        pose_errors: Relative frequency error per pose, shape (m,).
+        pose_errors: RMS per-mode relative frequency error at each pose, shape (m,).
         load_errors: Displacement-normalised tip error per load, shape (l,).
         model_hz: Chain frequencies at each pose, shape (m, n_modes) [Hz].
         model_tips_m: Chain tip positions, shape (l, 2) [m] (NaN where Newton failed).
         failed_loads: Number of loads whose Newton solve failed.
         residuals: Weighted residual vector whose squared norm is
             :math:`e_{eig}^2 + e_{defl}^2` (eigen part first, shape (m n_modes + 2 l,)).
+        eigen_error_eq16: RMS over poses of eq. (16),
+            :math:`\|f_{truth} - f_{model}\|_2 / \|f_{truth}\|_2` [-].
     """
 
     eigen_error: float
@@ -220,6 +224,7 @@ class Evaluation:
     model_tips_m: np.ndarray
     failed_loads: int
     residuals: np.ndarray
+    eigen_error_eq16: float
 
 
 def decode(problem: MappingProblem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -274,11 +279,11 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
     for i, pose in enumerate(problem.poses):
         posed = replace(chain, stiffness_nm_rad=k_pose[i])
         model_hz[i] = chain_frequencies(posed, pose, data)[: problem.n_modes]
-    pose_err = (np.linalg.norm(model_hz - problem.truth_hz, axis=1)
-                / np.linalg.norm(problem.truth_hz))
-    eig = float(np.sqrt(np.mean(pose_err**2)))
-    eig_res = ((model_hz - problem.truth_hz) / np.linalg.norm(problem.truth_hz)).ravel()
-    eig_res /= np.sqrt(problem.poses.shape[0])
+    rel = model_hz / problem.truth_hz - 1.0
+    pose_err = np.sqrt(np.mean(rel**2, axis=1))
+    eig = float(np.sqrt(np.mean(rel**2)))
+    eq16 = np.linalg.norm(model_hz - problem.truth_hz, axis=1) / np.linalg.norm(problem.truth_hz)
+    eig_res = rel.ravel() / np.sqrt(rel.size)
     n_loads = problem.forces_n.shape[0]
     tips = np.full((n_loads, 2), np.nan)
     load_err = np.full(n_loads, np.nan)
@@ -301,7 +306,7 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
     combined = float(np.hypot(eig, defl)) if deflection and n_loads else float("nan")
     residuals = np.concatenate([eig_res, defl_res.ravel() / np.sqrt(max(n_loads, 1))])
     return Evaluation(eig, defl, defl_pos, combined, pose_err, load_err, model_hz, tips, failed,
-                      residuals)
+                      residuals, float(np.sqrt(np.mean(eq16**2))))
 
 
 def _solve_load(problem: MappingProblem, chain: PrbdmChain, data: pin.Data, index: int,
