@@ -8,13 +8,16 @@ Two independent references replace paper 001's COMSOL runs:
 * **Large tip deflection** from the geometrically exact planar elastica under a tip force of
   fixed direction (a dead load), solved by shooting on the root bending moment.
 
-Conditioning (SPEC Sec. 7): the direct generalized problem :math:`K\phi = \lambda M\phi` loses
-digits as elements are added, because a symmetric eigensolver's absolute error is about
-:math:`\varepsilon\,\lambda_{max}` and :math:`\lambda_{max}/\lambda_1 \sim N^4`. pinflex solves the
-*compliance* form :math:`M\phi = \mu K\phi`, :math:`\mu = 1/\lambda`, where the wanted low modes
-are the largest :math:`\mu` and are computed to about :math:`\varepsilon\,\mu_1/\mu_k`; it keeps
-meshes moderate and removes the :math:`h^4` discretisation error by Richardson extrapolation on
-three nested meshes, whose two extrapolants must agree (a built-in convergence check).
+Conditioning: the direct generalized problem :math:`K\phi = \lambda M\phi` loses digits as
+elements are added, because a symmetric eigensolver's absolute error is about
+:math:`\varepsilon\,\lambda_{max}` and :math:`\lambda_{max}/\lambda_1 \sim N^4`; the nodal
+compliance form :math:`M\phi = \mu K\phi` helps but still inherits the Cholesky factor of an
+ill-conditioned K. pinflex instead rewrites the same Hermite model in energy-normalised relative
+(element-deformation) coordinates, where the stiffness is the identity and the low modes are the
+largest eigenvalues of a well-scaled symmetric matrix (:func:`relative_compliance_matrix`).
+Meshes are graded so that near-hinges stay in the asymptotic range (:func:`beam_mesh`), and the
+:math:`h^4` discretisation error is removed by Richardson extrapolation on three nested meshes,
+whose two extrapolants must agree (a built-in convergence check, :func:`beam_frequencies`).
 """
 
 from __future__ import annotations
