@@ -522,3 +522,69 @@ def expand_along(model: FlexibleModel, Q, y=None, *, tol: float = 1e-3, modes=(1
     result = TrajectoryExpansion(tuple(models), tuple(segments), int(p), tol, 0.0, candidates)
     err = float(np.max(np.abs(result.evaluate(Q, quantity=quantity) / exact - 1)))
     return TrajectoryExpansion(tuple(models), tuple(segments), int(p), tol, err, candidates)
+
+
+@dataclass(frozen=True)
+class SampledTaylor:
+    """A Taylor model restricted to fixed joint samples, fast to evaluate for new designs.
+
+    On a fixed trajectory only the design changes between evaluations (an optimizer's inner
+    loop), so the joint monomials are summed once: ``f(q_k, y) = Σ_β G_β[k] δy^β``.
+
+    Attributes:
+        space_y: Jet space of the expanded design variables (None when none is expanded).
+        G: Coefficients (nβ, ns, k) per design monomial β.
+        y0: Expansion design [kg], (ny,).
+        design_idx: Indices of the expanded design variables.
+    """
+
+    space_y: JetSpace | None
+    G: np.ndarray
+    y0: np.ndarray
+    design_idx: tuple[int, ...]
+
+    def values(self, y=None) -> np.ndarray:
+        """Polynomial values (ns, k) at the samples for design ``y`` [kg] (default y0)."""
+        if self.space_y is None or y is None:
+            return self.G[0]
+        dy = [float(y[j]) - float(self.y0[j]) for j in self.design_idx]
+        # one design point: its monomials in plain Python, then a single matrix product
+        parent, var = self._parent, self._var
+        mon = [1.0]
+        for c in range(1, len(parent)):
+            mon.append(mon[parent[c]] * dy[var[c]])
+        return self._Gt.dot(np.array(mon)).reshape(self._shape)
+
+    def __post_init__(self):
+        object.__setattr__(self, "_Gt", np.ascontiguousarray(self.G.reshape(self.G.shape[0], -1).T))
+        object.__setattr__(self, "_shape", self.G.shape[1:])
+        if self.space_y is not None:
+            object.__setattr__(self, "_parent", self.space_y.parent.tolist())
+            object.__setattr__(self, "_var", self.space_y.parent_var.tolist())
+
+
+def sample(tm: TaylorModel, Q, *, quantity: str = "freq_hz",
+           linear_in_design: bool = False) -> SampledTaylor:
+    """Fix the joint samples of a Taylor model (see :class:`SampledTaylor`)."""
+    coef = tm._coefficients(quantity, bool(linear_in_design))  # (ncoef, k)
+    nj, nd = len(tm.joint_idx), len(tm.design_idx)
+    mi = tm.space.multi_indices
+    Q = np.atleast_2d(np.asarray(Q, dtype=float))
+    if nj:
+        qspace = JetSpace(nj, tm.order)
+        dq = tm.offsets(Q, None, warn=True)[:, :nj]
+        mon_q = _monomials(qspace, dq)  # (ns, ncq)
+        qpos = np.array([qspace.index[tuple(a)] for a in mi[:, :nj].tolist()])
+    else:
+        mon_q = np.ones((Q.shape[0], 1))
+        qpos = np.zeros(len(mi), dtype=int)
+    if nd:
+        yspace = JetSpace(nd, tm.order)
+        ypos = np.array([yspace.index[tuple(b)] for b in mi[:, nj:].tolist()])
+        nb = yspace.ncoef
+    else:
+        yspace, ypos, nb = None, np.zeros(len(mi), dtype=int), 1
+    G = np.zeros((nb, Q.shape[0], coef.shape[1]))
+    for c in range(len(mi)):
+        G[ypos[c]] += mon_q[:, qpos[c], None] * coef[c][None, :]
+    return SampledTaylor(yspace, G, tm.y0, tm.design_idx)

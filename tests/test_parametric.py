@@ -205,3 +205,21 @@ def test_expansion_along_a_trajectory_meets_the_tolerance_with_the_fewest_points
     # segments tile the samples without gaps
     assert cover.segments[0][0] == 0 and cover.segments[-1][1] == 152
     assert all(a[1] == b[0] for a, b in zip(cover.segments, cover.segments[1:]))
+
+
+def test_sampled_model_equals_the_full_polynomial_for_any_design():
+    """Fixing the joint samples changes nothing: values equal evaluate() at any design."""
+    from pinflex.config import user_trajectory
+    from pinflex.parametric import sample
+
+    model = FlexibleModel(TWO_LINK, planar=True)
+    traj = user_trajectory(model, "benchmark_a")
+    tm = expand(model, Q0, order=4, modes=(1, 2))
+    for lin in (False, True):
+        s = sample(tm, traj.q, linear_in_design=lin)
+        for y in ([0.0, 0.0], [0.2, 0.05], [0.25, 0.25]):
+            np.testing.assert_allclose(
+                s.values(np.array(y)),
+                tm.evaluate(traj.q, np.array(y), quantity="freq_hz", linear_in_design=lin),
+                rtol=1e-13,
+            )
