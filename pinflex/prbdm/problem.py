@@ -72,6 +72,10 @@ class MappingProblem:
         truth_tips_m: Elastica tip positions (x, z), shape (l, 2) [m].
         stiffness_law: ``"segment"`` or ``"paper"``.
         alphas: Load levels :math:`\alpha = PL^2/EI_{eq}`, shape (l,).
+
+    The private ``_warm`` cache keeps each load's last converged joint angles so the next
+    design's Newton solve starts there; it never changes a returned answer beyond the Newton
+    tolerance, because every answer passes the same convergence and branch checks.
     """
 
     planform: Planform
