@@ -37,3 +37,20 @@ def test_prbdm_reports_bad_input_with_exit_status(capsys):
     status = cli.main(["prbdm", "--links", "2", "--modes", "3", "--json", "--no-progress"])
     assert status == 1
     assert "modes" in capsys.readouterr().err
+
+
+def test_prbdm_html_writes_an_offline_preview(tmp_path, capsys):
+    """`pinflex prbdm --html FILE` writes one self-contained page and names it in the JSON."""
+    import json
+
+    from pinflex.cli import main
+
+    page = tmp_path / "chain.html"
+    code = main(["prbdm", "--beam", "random", "--seed", "2", "--links", "2", "--modes", "2",
+                 "--starts", "1", "--no-progress", "--json", "--html", str(page)])
+    assert code == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["html"] == str(page)
+    text = page.read_text()
+    assert len(text) > 100_000 and "<script" in text
+    assert "http://" not in text.split("<script")[0]  # nothing fetched before the inlined viewer

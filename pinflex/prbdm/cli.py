@@ -48,6 +48,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--starts", type=int, default=8, help="multistart points per search")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    parser.add_argument("--html", default=None, metavar="FILE",
+                        help="write an offline HTML preview of the fitted chain over its beam")
     parser.set_defaults(func=run)
     return parser
 
@@ -69,8 +71,18 @@ def run(args: argparse.Namespace) -> int:
     except PinflexError as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
+    html = None
+    if args.html:
+        from pinflex.visualization import prbdm_preview_html
+
+        html = str(prbdm_preview_html(beam, fit, args.html))
     if args.json:
-        print(fit.to_json())
+        if html is None:
+            print(fit.to_json())
+        else:
+            import json
+
+            print(json.dumps(dict(json.loads(fit.to_json()), html=html)))
         return 0
     out = fit.to_dict()
     print(f"{args.links}R PRBDM of the {fit.beam} beam, objective {fit.objective}, "
@@ -82,6 +94,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"  eigen error        {fit.eigen_error:.3e}")
     print(f"  deflection error   {fit.deflection_error:.3e}")
     print(f"  combined error     {fit.combined_error:.3e}")
+    if html:
+        print(f"  wrote {html}")
     return 0
 
 
