@@ -30,6 +30,7 @@ from typing import Sequence
 
 import numpy as np
 
+from pinflex._arrays import readonly as _readonly
 from pinflex.exceptions import AssignmentInfeasible, InvalidAssignmentProblem
 
 __all__ = [
@@ -40,11 +41,6 @@ __all__ = [
     "solve_assignment_qp_scipy",
 ]
 
-
-def _readonly(array) -> np.ndarray:
-    array = np.array(array, dtype=float)
-    array.setflags(write=False)
-    return array
 
 
 @dataclass(frozen=True)

@@ -9,26 +9,27 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pinflex.exceptions import PinflexError
+from pinflex.exceptions import ConfigurationError, PinflexError
 
 
-def _parse_set(items: Sequence[str]) -> dict[str, float]:
+def parse_values(items: Sequence[str] | None) -> dict[str, float]:
+    """``NAME=VALUE`` strings (``--set``) to a ``{name: float}`` dictionary."""
     out = {}
     for item in items or ():
         name, sep, value = item.partition("=")
         if not sep:
-            raise PinflexError(f"--set expects NAME=VALUE, got '{item}'")
+            raise ConfigurationError(f"--set expects NAME=VALUE, got '{item}'")
         try:
             out[name.strip()] = float(value)
         except ValueError as exc:
-            raise PinflexError(f"--set {item}: '{value}' is not a number") from exc
+            raise ConfigurationError(f"--set {item}: '{value}' is not a number") from exc
     return out
 
 
 def _cmd_modes(args: argparse.Namespace) -> int:
     from pinflex.erls import FlexibleModel
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=_parse_set(args.set))
+    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set))
     q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
     result = model.modes(q, n_modes=args.modes)
     freqs = result.freq_hz
@@ -51,7 +52,8 @@ def _cmd_modes(args: argparse.Namespace) -> int:
           f"{'planar' if model.planar else 'spatial'}, {model.coordinates} joint coordinates")
     print("q = " + ", ".join(f"{n}={v:.6g}" for n, v in zip(model.joint_names, q)))
     if model.ny:
-        print("design: " + ", ".join(f"{d.name}={v:.6g} kg" for d, v in zip(model.design, result.y)))
+        values = ", ".join(f"{d.name}={v:.6g} kg" for d, v in zip(model.design, result.y))
+        print(f"design: {values}")
     print(f"rigid modes: {result.rigid_modes}")
     print(f"{'mode':>4}  {'frequency [Hz]':>16}")
     for i, f in enumerate(freqs, start=1):

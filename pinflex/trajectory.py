@@ -30,6 +30,7 @@ from typing import Literal, Sequence
 import numpy as np
 from scipy.optimize import brentq
 
+from pinflex._arrays import readonly as _readonly
 from pinflex.exceptions import (
     IKNotConverged,
     InvalidPath,
@@ -57,11 +58,6 @@ __all__ = [
     "workspace_path",
 ]
 
-
-def _readonly(array: np.ndarray) -> np.ndarray:
-    array = np.array(array, dtype=float)
-    array.setflags(write=False)
-    return array
 
 
 def trapezoid_weights(times_s: np.ndarray) -> np.ndarray:

@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Sequence
 
 import numpy as np
 
-from pinflex.exceptions import ConfigurationError
+from pinflex.cli import parse_values
 
 
 def add_parser(sub) -> None:
@@ -38,19 +37,6 @@ def add_parser(sub) -> None:
                    help="stop serving after S seconds (default: until Ctrl-C)")
     p.set_defaults(func=cmd_view)
 
-
-def parse_values(items: Sequence[str] | None) -> dict[str, float]:
-    """``NAME=VALUE`` strings to a ``{name: float}`` dictionary."""
-    out = {}
-    for item in items or ():
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise ConfigurationError(f"--set expects NAME=VALUE, got '{item}'")
-        try:
-            out[name.strip()] = float(value)
-        except ValueError as exc:
-            raise ConfigurationError(f"--set {item}: '{value}' is not a number") from exc
-    return out
 
 
 def cmd_view(args: argparse.Namespace) -> int:

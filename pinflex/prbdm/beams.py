@@ -25,6 +25,8 @@ from functools import cached_property
 
 import numpy as np
 
+from pinflex._arrays import readonly as _readonly
+
 from ..exceptions import InvalidBeam
 
 _GAUSS3_X, _GAUSS3_W = np.polynomial.legendre.leggauss(3)
@@ -56,11 +58,6 @@ class Material:
 
 STEEL = Material(youngs_modulus_pa=205e9, density_kg_m3=7850.0, name="steel")
 
-
-def _readonly(values: np.ndarray) -> np.ndarray:
-    array = np.array(values, dtype=float)
-    array.setflags(write=False)
-    return array
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,8 @@ import numpy as np
 import pinocchio as pin
 import scipy.linalg as sla
 
+from pinflex._arrays import readonly as _readonly
+
 from ..exceptions import ConfigurationError, InvalidChain, NewtonDivergence
 from .beams import Planform, chain_segments
 
@@ -60,11 +62,6 @@ class PrbdmChain:
         """Diagonal spring matrix K, shape (n, n) [N m/rad]."""
         return np.diag(self.stiffness_nm_rad)
 
-
-def _readonly(values) -> np.ndarray:
-    array = np.array(values, dtype=float)
-    array.setflags(write=False)
-    return array
 
 
 def validate_fractions(gamma: np.ndarray, min_fraction: float = 0.0) -> np.ndarray:
