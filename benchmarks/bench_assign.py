@@ -35,9 +35,11 @@ def main():
         r = assign_frequencies(model, traj, target, q0=Q0)
         runs.append(r.timings_s)
     best = {k: min(t[k] for t in runs) for k in runs[0]}
-    print("stage times (best of 5) [ms]: " + ", ".join(f"{k} {1e3 * v:.1f}" for k, v in best.items()))
+    stages = ", ".join(f"{k} {1e3 * v:.1f}" for k, v in best.items())
+    print(f"stage times (best of 5) [ms]: {stages}")
     end_to_end = best["expansion_and_build"] + best["qp"] + best["exact_verification"]
-    print(f"benchmark A end to end (expansion + QP + exact verification): {1e3 * end_to_end:.1f} ms "
+    print("benchmark A end to end (expansion + QP + exact verification): "
+          f"{1e3 * end_to_end:.1f} ms "
           "(target < 500 ms)")
     print(f"design m1 = {r.design['m1']:.5f} kg, m2 = {r.design['m2']:.5f} kg; max error "
           f"{100 * r.max_error_before:.2f} % -> {100 * r.max_error_after:.2f} % (exact), "

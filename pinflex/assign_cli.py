@@ -80,7 +80,8 @@ def cmd_assign(args: argparse.Namespace) -> int:
         return 0
     print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
     print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
-          f"{100 * result.max_error_after:.2f} % (predicted {100 * result.predicted_max_error_after:.2f} %)")
+          f"{100 * result.max_error_after:.2f} % "
+          f"(predicted {100 * result.predicted_max_error_after:.2f} %)")
     print(f"QP: {result.solution.iterations} iterations, {1e3 * result.solution.time_s:.3f} ms; "
           f"total {total:.3f} s")
     for c in charts:
@@ -140,7 +141,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
         f"{PAPER['taylor_traj_full']:6.2f}% {errs['taylor_traj_lin']:7.3f}% "
         f"{PAPER['taylor_traj_lin']:6.2f}%")
     say(f"  {'q0, y in [0, 0.25]^2 (26 x 26 grid)':42s} {errs['taylor_y_full']:7.3f}% "
-        f"{PAPER['taylor_y_full']:6.2f}% {errs['taylor_y_lin']:7.3f}% {PAPER['taylor_y_lin']:6.2f}%")
+        f"{PAPER['taylor_y_full']:6.2f}% {errs['taylor_y_lin']:7.3f}% "
+        f"{PAPER['taylor_y_lin']:6.2f}%")
 
     # Assignment (paper Sec. 3.3)
     result = assign_frequencies(model, traj, [Target(1, 190.0)], q0=q0, y0=y0, order=4,

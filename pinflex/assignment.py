@@ -303,7 +303,8 @@ def assign_frequencies(
         predicted = _predicted_error(problem, taylor, trajectory, targets, solution, kwargs)
         refinements += 1
     timings["total"] = time.perf_counter() - t_start
-    at_bound = [d.name for d, v in zip(model.design, y) if v <= d.lower + 1e-9 or v >= d.upper - 1e-9]
+    at_bound = [d.name for d, v in zip(model.design, y)
+                if v <= d.lower + 1e-9 or v >= d.upper - 1e-9]
     if err_after > 0.05 and at_bound:
         warnings.warn(
             f"the best design leaves a {100 * err_after:.2f} % target error and sits on the "

@@ -138,7 +138,9 @@ def load_config(path: str | Path) -> AssignmentConfig:
     known = {"robot", "planar", "trajectory", "expansion", "targets", "constraints", "options"}
     unknown = set(data) - known
     if unknown:
-        raise ConfigurationError(f"'{path}': unknown keys {sorted(unknown)}; known: {sorted(known)}")
+        raise ConfigurationError(
+            f"'{path}': unknown keys {sorted(unknown)}; known: {sorted(known)}"
+        )
     return AssignmentConfig(
         robot=resolve(data["robot"], folder),
         planar=bool(data.get("planar", False)),

@@ -66,8 +66,8 @@ class JetAlgebra:
 
 def _angle_terms(model: FlexibleModel, joint_vars: dict[int, int], col: int):
     """Variables and factors of δq_pin[col] = Σ_l C[col, l] δq_user[l]."""
-    return [(var, model.coord_map[col, l]) for l, var in joint_vars.items()
-            if model.coord_map[col, l] != 0.0]
+    return [(var, model.coord_map[col, j]) for j, var in joint_vars.items()
+            if model.coord_map[col, j] != 0.0]
 
 
 def _rotation_jet(space: JetSpace, axis: np.ndarray, angle0: float, terms) -> np.ndarray:
@@ -174,7 +174,7 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     # space, then embed. Design masses enter M linearly: δy_j shifts coefficients by e_j.
     if nj:
         qspace = JetSpace(nj, int(order))
-        terms = pose_jets(model, qspace, q0, {l: k for k, l in enumerate(joint_idx)})
+        terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
         Mq, Mdq, Kq = model.assemble(terms, JetAlgebra(qspace))
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:

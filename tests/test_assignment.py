@@ -93,8 +93,7 @@ def test_frequency_floor_on_mode_2_holds_in_the_prediction_and_binds(setup):
 
 
 def test_multi_mode_targets_weigh_both_modes(setup):
-    """Targeting modes 1 and 2 gives a different design than mode 1 alone, and each cost term
-    is the single-mode cost."""
+    """Targeting modes 1 and 2 changes the design; the cost is the sum of single-mode costs."""
     model, traj = setup
     targets = [Target(1, 190.0), Target(2, 400.0, weight=0.5)]
     p_both, _ = build_assignment(model, traj, targets, q0=Q0)
@@ -105,7 +104,7 @@ def test_multi_mode_targets_weigh_both_modes(setup):
     r = assign_frequencies(model, traj, targets, q0=Q0)
     assert r.freq_after_hz.shape[1] == 2
     r1 = assign_frequencies(model, traj, targets[:1], q0=Q0)
-    assert abs(r.design["m2"] - r1.design["m2"]) > 1e-3 or abs(r.design["m1"] - r1.design["m1"]) > 1e-3
+    assert np.max(np.abs(r.y - r1.y)) > 1e-3
 
 
 def test_infeasible_constraints_raise(setup):
