@@ -1,0 +1,183 @@
+"""Taylor models along a trajectory: several expansion points, and fixed samples."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pinflex.erls import FlexibleModel
+from pinflex.jets import JetSpace
+from pinflex.parametric.model import TaylorModel, _monomials, expand
+
+
+@dataclass(frozen=True)
+class TrajectoryExpansion:
+    """Several Taylor models covering a trajectory, each on a run of consecutive samples.
+
+    Attributes:
+        models: The Taylor models (joints expanded, design fixed).
+        segments: Sample ranges ``(start, stop)`` (stop exclusive) covered by each model.
+        order: Their common order p.
+        tol: Relative tolerance they were chosen for.
+        max_error: Largest relative error over all samples, checked with the exact model.
+        candidates: ``{order: number of expansion points}`` for every order tried.
+    """
+
+    models: tuple[TaylorModel, ...]
+    segments: tuple[tuple[int, int], ...]
+    order: int
+    tol: float
+    max_error: float
+    candidates: dict[int, int]
+
+    def evaluate(self, Q, *, quantity: str = "freq_hz") -> np.ndarray:
+        """Values at the trajectory's own samples Q (ns, nv), each from its segment's model."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        out = None
+        for tm, (a, b) in zip(self.models, self.segments):
+            v = tm.evaluate(Q[a:b], quantity=quantity, warn=False)
+            if out is None:
+                out = np.empty((Q.shape[0],) + v.shape[1:])
+            out[a:b] = v
+        return out
+
+
+def _cover(model, Q, y, exact, tol, order, modes, joints, quantity, step):
+    """Greedy cover of the samples by expansions of one order; returns models and segments."""
+    ns = Q.shape[0]
+    models, segments = [], []
+    s = 0
+    while s < ns:
+        best = None
+        c = s
+        while c < ns:
+            tm = expand(model, Q[c], y, order=order, modes=modes, joints=joints, design=[])
+            approx = tm.evaluate(Q, quantity=quantity, warn=False)
+            ok = np.all(np.abs(approx / exact - 1) <= tol, axis=1)
+            a = c
+            while a > s and ok[a - 1]:
+                a -= 1
+            if a > s:  # this centre no longer reaches back to s
+                break
+            b = c
+            while b < ns and ok[b]:
+                b += 1
+            if best is None or b > best[2]:
+                best = (tm, s, b)
+            if b >= ns:
+                break
+            c += step
+        tm, a, b = best
+        models.append(tm)
+        segments.append((a, b))
+        s = b
+    return models, segments
+
+
+def expand_along(model: FlexibleModel, Q, y=None, *, tol: float = 1e-3, modes=(1,),
+                 orders: Sequence[int] = tuple(range(1, 9)), joints=None,
+                 quantity: str = "freq_hz", step: int | None = None) -> TrajectoryExpansion:
+    """Cover a trajectory with the fewest Taylor expansions, then the lowest order, within tol.
+
+    For each order p the samples are covered greedily from the start: among expansion points
+    tried every ``step`` samples ahead, the one whose validity run (relative error ≤ ``tol``
+    against the exact model, for every requested mode) reaches back to the first uncovered
+    sample and furthest forward is kept. The answer is the order with the fewest expansion
+    points, the lowest order on ties: no more model than the trajectory needs.
+
+    Args:
+        model: The flexible model.
+        Q: Trajectory samples (ns, nv), user coordinates.
+        y: Design values [kg] (fixed; default nominal).
+        tol: Relative tolerance on the expanded quantity.
+        modes: Non-rigid modes to cover.
+        orders: Orders to try.
+        joints: Joints to expand (default all).
+        quantity: 'freq_hz' or 'eigval'.
+        step: Spacing of candidate expansion points in samples (default ns // 38 + 1).
+    """
+    Q = model.check_q(Q)
+    y = model.check_y(y)
+    modes = tuple(int(m) for m in np.atleast_1d(modes))
+    f = model.frequencies(Q, y, n_modes=max(modes))[:, [m - 1 for m in modes]]
+    exact = f if quantity == "freq_hz" else (2 * np.pi * f) ** 2
+    step = step or (Q.shape[0] // 38 + 1)
+    best = None
+    candidates = {}
+    for p in orders:
+        models, segments = _cover(model, Q, y, exact, tol, p, modes, joints, quantity, step)
+        candidates[int(p)] = len(models)
+        if best is None or len(models) < len(best[1]):
+            best = (p, models, segments)
+    p, models, segments = best
+    result = TrajectoryExpansion(tuple(models), tuple(segments), int(p), tol, 0.0, candidates)
+    err = float(np.max(np.abs(result.evaluate(Q, quantity=quantity) / exact - 1)))
+    return TrajectoryExpansion(tuple(models), tuple(segments), int(p), tol, err, candidates)
+
+
+@dataclass(frozen=True)
+class SampledTaylor:
+    """A Taylor model restricted to fixed joint samples, fast to evaluate for new designs.
+
+    On a fixed trajectory only the design changes between evaluations (an optimizer's inner
+    loop), so the joint monomials are summed once: ``f(q_k, y) = Σ_β G_β[k] δy^β``.
+
+    Attributes:
+        space_y: Jet space of the expanded design variables (None when none is expanded).
+        G: Coefficients (nβ, ns, k) per design monomial β.
+        y0: Expansion design [kg], (ny,).
+        design_idx: Indices of the expanded design variables.
+    """
+
+    space_y: JetSpace | None
+    G: np.ndarray
+    y0: np.ndarray
+    design_idx: tuple[int, ...]
+
+    def values(self, y=None) -> np.ndarray:
+        """Polynomial values (ns, k) at the samples for design ``y`` [kg] (default y0)."""
+        if self.space_y is None or y is None:
+            return self.G[0]
+        dy = [float(y[j]) - float(self.y0[j]) for j in self.design_idx]
+        # one design point: its monomials in plain Python, then a single matrix product
+        parent, var = self._parent, self._var
+        mon = [1.0]
+        for c in range(1, len(parent)):
+            mon.append(mon[parent[c]] * dy[var[c]])
+        return self._Gt.dot(np.array(mon)).reshape(self._shape)
+
+    def __post_init__(self):
+        object.__setattr__(self, "_Gt", np.ascontiguousarray(self.G.reshape(self.G.shape[0], -1).T))
+        object.__setattr__(self, "_shape", self.G.shape[1:])
+        if self.space_y is not None:
+            object.__setattr__(self, "_parent", self.space_y.parent.tolist())
+            object.__setattr__(self, "_var", self.space_y.parent_var.tolist())
+
+
+def sample(tm: TaylorModel, Q, *, quantity: str = "freq_hz",
+           linear_in_design: bool = False) -> SampledTaylor:
+    """Fix the joint samples of a Taylor model (see :class:`SampledTaylor`)."""
+    coef = tm._coefficients(quantity, bool(linear_in_design))  # (ncoef, k)
+    nj, nd = len(tm.joint_idx), len(tm.design_idx)
+    mi = tm.space.multi_indices
+    Q = np.atleast_2d(np.asarray(Q, dtype=float))
+    if nj:
+        qspace = JetSpace(nj, tm.order)
+        dq = tm.offsets(Q, None, warn=True)[:, :nj]
+        mon_q = _monomials(qspace, dq)  # (ns, ncq)
+        qpos = np.array([qspace.index[tuple(a)] for a in mi[:, :nj].tolist()])
+    else:
+        mon_q = np.ones((Q.shape[0], 1))
+        qpos = np.zeros(len(mi), dtype=int)
+    if nd:
+        yspace = JetSpace(nd, tm.order)
+        ypos = np.array([yspace.index[tuple(b)] for b in mi[:, nj:].tolist()])
+        nb = yspace.ncoef
+    else:
+        yspace, ypos, nb = None, np.zeros(len(mi), dtype=int), 1
+    G = np.zeros((nb, Q.shape[0], coef.shape[1]))
+    for c in range(len(mi)):
+        G[ypos[c]] += mon_q[:, qpos[c], None] * coef[c][None, :]
+    return SampledTaylor(yspace, G, tm.y0, tm.design_idx)

@@ -1,0 +1,159 @@
+"""Exact Taylor coefficients of M(q, y) and K(q, y) through the joint kinematics."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from pinflex import jets
+from pinflex.erls import BatchAlgebra, FlexibleModel, _PoseTerms
+from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
+from pinflex.jets import JetSpace
+from pinflex.kinematics import axis_rotation, skew
+
+
+class JetAlgebra:
+    """Taylor coefficients on the leading axis (see :class:`pinflex.erls.BatchAlgebra`)."""
+
+    def __init__(self, space: JetSpace):
+        self.space = space
+
+    def const(self, c: np.ndarray) -> np.ndarray:
+        """Jet of a constant array."""
+        return jets.constant(self.space, c)
+
+    def mm(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Truncated product of two matrix jets."""
+        return jets.matmul(self.space, a, b)
+
+
+def _angle_terms(model: FlexibleModel, joint_vars: dict[int, int], col: int):
+    """Variables and factors of δq_pin[col] = Σ_l C[col, l] δq_user[l]."""
+    return [(var, model.coord_map[col, j]) for j, var in joint_vars.items()
+            if model.coord_map[col, j] != 0.0]
+
+
+def _rotation_jet(space: JetSpace, axis: np.ndarray, angle0: float, terms) -> np.ndarray:
+    """Jet of the rotation about ``axis`` by ``angle0 + Σ c_k δx_k``."""
+    R = jets.constant(space, axis_rotation(axis, np.array([angle0]))[0])
+    k1 = skew(axis)
+    k2 = k1 @ k1
+    one = jets.constant(space, 1.0)
+    for var, c in terms:
+        s, co = jets.sin_cos_of_variable(space, var, 0.0)
+        scale = float(c) ** space.multi_indices[:, var]
+        s, co = s * scale, co * scale
+        step = (jets.constant(space, np.eye(3)) + s[:, None, None] * k1
+                + (one - co)[:, None, None] * k2)
+        R = jets.matmul(space, R, step)
+    return R
+
+
+def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
+              joint_vars: dict[int, int]) -> _PoseTerms:
+    """Jets of the ERLS pose terms (frame Jacobians, joint rotations) at ``q0``.
+
+    Args:
+        model: The flexible model.
+        space: Jet space.
+        q0: Expansion pose in user coordinates, (nv,).
+        joint_vars: Map user joint index -> jet variable index of the expanded joints.
+    """
+    nv, nc = model.nv, space.ncoef
+    q0p = model.coord_map @ q0
+    J = {model._order[0]: np.zeros((nc, 6, nv))}
+    rot, slide = {}, {}
+    for j in model._joints:
+        if j.kind == "revolute":
+            terms = _angle_terms(model, joint_vars, j.user_col)
+            R = j.R_o @ _rotation_jet(space, j.axis, q0p[j.user_col], terms)
+            t = jets.constant(space, j.xyz)
+            rot[j.name] = R
+        elif j.kind == "prismatic":
+            d = jets.constant(space, q0p[j.user_col])
+            for var, c in _angle_terms(model, joint_vars, j.user_col):
+                d = d + c * jets.variable(space, var, 0.0)
+            R = jets.constant(space, j.R_o)
+            offset = d[:, None] * (j.R_o @ j.axis)[None, :]
+            slide[j.name] = offset
+            t = jets.constant(space, j.xyz) + offset
+        else:
+            R = jets.constant(space, j.R_o)
+            t = jets.constant(space, j.xyz)
+        JP = J[j.parent]
+        if nv == 0:
+            J[j.child] = JP
+            continue
+        RT = np.swapaxes(R, -1, -2)
+        lin = JP[:, :3] - jets.matmul(space, skew(t), JP[:, 3:])
+        Jc = np.concatenate([jets.matmul(space, RT, lin), jets.matmul(space, RT, JP[:, 3:])],
+                            axis=1)
+        if j.kind == "revolute":
+            Jc[0, 3:, j.user_col] += j.axis
+        elif j.kind == "prismatic":
+            Jc[0, :3, j.user_col] += j.axis
+        J[j.child] = Jc
+    jac = {link: J[link] @ model.coord_map for link in model._carriers}
+    return _PoseTerms(jac, rot, slide)
+
+
+def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
+                joints: Sequence[str] | None = None, design: Sequence[str] | None = None):
+    """Exact Taylor coefficients of ``M(q, y)`` and ``K(q, y)`` at ``(q0, y0)``.
+
+    Args:
+        model: The flexible model.
+        q0: Expansion pose (user coordinates) [rad or m], (nv,).
+        y0: Expansion design values [kg] (default nominal).
+        order: Truncation order p.
+        joints: Names of the joints to expand (default all).
+        design: Names of the design variables to expand (default all).
+
+    Returns:
+        ``(space, M_jet, K_jet, joint_idx, design_idx)``: jets of shape (ncoef, ndof, ndof);
+        the variables are the listed joints then the listed design variables, in order.
+    """
+    q0 = model.check_q(q0).astype(float)
+    if q0.ndim != 1:
+        raise ConfigurationError("the expansion point must be a single pose")
+    y0 = model.check_y(y0)
+    joint_idx = [model.joint_index(n) for n in (model.joint_names if joints is None else joints)]
+    names = model.design_names if design is None else tuple(design)
+    design_idx = []
+    for n in names:
+        if n not in model.design_names:
+            raise DesignVariableNotFound(n, model.design_names)
+        design_idx.append(model.design_names.index(n))
+    nvars = len(joint_idx) + len(design_idx)
+    if nvars == 0:
+        raise ConfigurationError("expand at least one joint or design variable")
+    if order < 0:
+        raise ConfigurationError(f"order = {order} must be >= 0")
+    space = JetSpace(nvars, int(order))
+    nj, nd = len(joint_idx), len(design_idx)
+    # The pose terms depend on the joints only: assemble in the joints' own (smaller) jet
+    # space, then embed. Design masses enter M linearly: δy_j shifts coefficients by e_j.
+    if nj:
+        qspace = JetSpace(nj, int(order))
+        terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
+        Mq, Mdq, Kq = model.assemble(terms, JetAlgebra(qspace))
+        alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
+    else:
+        Mq, Mdq, Kq = model.assemble(model.pose_terms(q0[None]), BatchAlgebra(1))
+        alphas = [()]
+    zeros = (0,) * nd
+    emb = np.array([space.index[a + zeros] for a in alphas])
+    shape = (space.ncoef,) + Mq.shape[1:]
+    M, K = np.zeros(shape), np.zeros(shape)
+    M[emb] = Mq
+    K[emb] = Kq
+    for j in range(model.ny):
+        M[emb] += y0[j] * Mdq[j]
+        if j in design_idx:
+            k = design_idx.index(j)
+            unit = tuple(int(i == k) for i in range(nd))
+            low = [i for i, a in enumerate(alphas) if sum(a) < order]
+            shifted = np.array([space.index[alphas[i] + unit] for i in low], dtype=int)
+            M[shifted] += Mdq[j][low]
+    return space, M, np.array(K), joint_idx, design_idx
