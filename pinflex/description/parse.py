@@ -1,218 +1,29 @@
-"""Robot description: a URDF file plus pinflex annotations in the same file.
-
-Annotations live in the XML namespace :data:`NAMESPACE` as direct children of ``<robot>``;
-URDF parsers (Pinocchio's included) ignore them, so the file still loads unchanged. Example::
-
-    <robot name="arm" xmlns:pinflex="urn:pinflex:urdf:1">
-      ...
-      <pinflex:flexible link="link1" elements="4" normal="0 0 1">
-        <pinflex:material E="69e9" G="26e9" linear_density="1.9"/>
-        <pinflex:section A="7.07e-4" Iy="3.97e-8" Iz="3.97e-8" J="7.94e-8"/>
-      </pinflex:flexible>
-      <pinflex:point_mass name="m1" link="link1" xyz="0.6 0 0" mass="0.125"
-                          design="true" lower="0" upper="0.25"/>
-      <pinflex:coordinates convention="absolute"/>
-    </robot>
-
-``<pinflex:flexible>`` attributes: ``link`` (required), ``elements`` (required, >= 1),
-``tip`` (beam end in the link frame [m]; default: the origin of the link's only child joint),
-``normal`` (a vector in the link frame fixing the beam's z axis; default: the parent joint's
-axis if it is normal to the beam, else the link axis least aligned with the beam).
-The beam replaces the link's URDF inertial (its mass comes from the section and density);
-everything attached to the link (child joints, point masses) rides on the beam at its axial
-station, with a rigid offset from the axis.
-``<pinflex:material>``: ``E`` [Pa] (required), ``G`` [Pa] (default ``E / (2 (1 + poisson))``,
-``poisson`` default 0.3), and ``density`` [kg/m^3] or ``linear_density`` [kg/m].
-``<pinflex:section>``: explicit ``A Iy Iz J`` [m^2, m^4], or ``shape`` = ``solid_circle``
-(``diameter``), ``hollow_circle`` (``outer_diameter``, ``inner_diameter``) or ``rectangle``
-(``width`` along the beam's y, ``height`` along z).
-
-``<pinflex:point_mass>``: ``name``, ``link``, ``xyz`` in the link frame [m], ``mass`` [kg];
-with ``design="true"`` it is a design variable with ``lower``/``upper`` bounds [kg].
-
-``<pinflex:coordinates convention="absolute"/>`` declares that the user-facing coordinates of a
-planar serial arm are absolute link angles (paper 000's convention) instead of Pinocchio's
-relative joint angles; see :class:`pinflex.erls.FlexibleModel`.
-"""
+"""Parsing annotated URDF text into a :class:`RobotDescription`."""
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from pinflex import beam
+from pinflex.description.overlay import apply_overlay, resolve_base
+from pinflex.description.types import (
+    _NS,
+    SUPPORTED_JOINTS,
+    FlexibleLink,
+    Joint,
+    PointMass,
+    RigidInertia,
+    RobotDescription,
+)
 from pinflex.exceptions import (
     InvalidBeamProperty,
     InvalidDescription,
-    JointNotFound,
     LinkNotFound,
     UnsupportedJoint,
 )
-
-NAMESPACE = "urn:pinflex:urdf:1"
-_NS = "{" + NAMESPACE + "}"
-
-MOVING_JOINTS = ("revolute", "continuous", "prismatic")
-SUPPORTED_JOINTS = MOVING_JOINTS + ("fixed",)
-
-
-@dataclass(frozen=True)
-class Joint:
-    """A URDF joint.
-
-    Attributes:
-        name: Joint name.
-        type: 'revolute', 'continuous', 'prismatic' or 'fixed'.
-        parent: Parent link name.
-        child: Child link name.
-        xyz: Origin of the joint frame in the parent link frame [m], (3,).
-        rotation: Rotation of the joint frame in the parent link frame, (3, 3).
-        axis: Unit joint axis in the joint frame, (3,).
-        lower: Lower position limit [rad or m] (-inf when absent).
-        upper: Upper position limit [rad or m] (+inf when absent).
-    """
-
-    name: str
-    type: str
-    parent: str
-    child: str
-    xyz: np.ndarray
-    rotation: np.ndarray
-    axis: np.ndarray
-    lower: float = -np.inf
-    upper: float = np.inf
-
-
-@dataclass(frozen=True)
-class RigidInertia:
-    """URDF inertial of a link, expressed at the link frame origin in link axes.
-
-    Attributes:
-        mass: Mass [kg].
-        com: Centre of mass [m], (3,).
-        inertia: Rotational inertia about the centre of mass in link axes [kg m^2], (3, 3).
-    """
-
-    mass: float
-    com: np.ndarray
-    inertia: np.ndarray
-
-    def spatial_matrix(self) -> np.ndarray:
-        """6×6 spatial inertia at the link origin, ordering (linear, angular)."""
-        c = self.com
-        cx = _skew(c)
-        out = np.zeros((6, 6))
-        out[:3, :3] = self.mass * np.eye(3)
-        out[:3, 3:] = -self.mass * cx
-        out[3:, :3] = self.mass * cx
-        out[3:, 3:] = self.inertia - self.mass * cx @ cx
-        return out
-
-
-@dataclass(frozen=True)
-class FlexibleLink:
-    """A link modelled as a straight finite-element beam.
-
-    Attributes:
-        link: URDF link name.
-        elements: Number of equal beam elements.
-        tip: Beam end point in the link frame [m], (3,); the beam starts at the link origin.
-        normal: Unit vector in the link frame, the beam's z axis (normal to the beam).
-        E: Young's modulus [Pa].
-        G: Shear modulus [Pa].
-        rhoA: Mass per unit length [kg/m].
-        rhoIp: Torsional rotary inertia per unit length [kg m].
-        section: Cross-section properties.
-    """
-
-    link: str
-    elements: int
-    tip: np.ndarray
-    normal: np.ndarray
-    E: float
-    G: float
-    rhoA: float
-    rhoIp: float
-    section: beam.Section
-
-    @property
-    def length_m(self) -> float:
-        """Beam length [m]."""
-        return float(np.linalg.norm(self.tip))
-
-    @property
-    def rotation(self) -> np.ndarray:
-        """Beam axes in the link frame, columns (x, y, z), (3, 3)."""
-        x = self.tip / self.length_m
-        z = self.normal
-        return np.column_stack([x, np.cross(z, x), z])
-
-
-@dataclass(frozen=True)
-class PointMass:
-    """A point mass on a link.
-
-    Attributes:
-        name: Unique name.
-        link: Link carrying the mass.
-        xyz: Position in the link frame [m], (3,).
-        mass: Nominal mass [kg].
-        design: Whether the mass is a design variable.
-        lower: Lower bound of the design variable [kg].
-        upper: Upper bound of the design variable [kg].
-    """
-
-    name: str
-    link: str
-    xyz: np.ndarray
-    mass: float
-    design: bool = False
-    lower: float = 0.0
-    upper: float = np.inf
-
-
-@dataclass(frozen=True)
-class RobotDescription:
-    """Everything pinflex reads from an annotated URDF.
-
-    Attributes:
-        name: Robot name.
-        urdf_xml: The URDF text that Pinocchio parses.
-        base_dir: Folder of the file, for relative mesh paths.
-        root: Name of the root link (clamped to the ground).
-        links: Link names in file order.
-        joints: Joints by name.
-        inertias: URDF inertials by link name (links without one are absent).
-        flexible: Flexible links by link name.
-        point_masses: Point masses in file order.
-        absolute_coordinates: Whether user coordinates are absolute link angles.
-    """
-
-    name: str
-    urdf_xml: str
-    base_dir: Path | None
-    root: str
-    links: tuple[str, ...]
-    joints: dict[str, Joint]
-    inertias: dict[str, RigidInertia]
-    flexible: dict[str, FlexibleLink]
-    point_masses: tuple[PointMass, ...]
-    absolute_coordinates: bool = False
-    child_joints: dict[str, tuple[str, ...]] = field(default_factory=dict)
-    parent_joint: dict[str, str] = field(default_factory=dict)
-
-    def require_link(self, name: str) -> None:
-        """Raise :class:`LinkNotFound` unless ``name`` is a link."""
-        if name not in self.links:
-            raise LinkNotFound(name, self.links)
-
-    def require_joint(self, name: str) -> None:
-        """Raise :class:`JointNotFound` unless ``name`` is a joint."""
-        if name not in self.joints:
-            raise JointNotFound(name, self.joints)
 
 
 def load(path: str | Path) -> RobotDescription:
@@ -229,68 +40,6 @@ def load(path: str | Path) -> RobotDescription:
         base = resolve_base(root_el.get("base", ""), path.parent)
         return parse(apply_overlay(base.read_text(), root_el), base_dir=base.parent)
     return parse(text, base_dir=path.parent)
-
-
-ROBOT_DATA_PREFIX = "example-robot-data:"
-
-
-def robot_data_dir() -> Path:
-    """The ``robots/`` folder of the installed example-robot-data package."""
-    import importlib.util
-
-    spec = importlib.util.find_spec("cmeel")
-    candidates = []
-    if spec is not None and spec.submodule_search_locations:
-        for loc in spec.submodule_search_locations:
-            candidates.append(Path(loc).parent / "cmeel.prefix" / "share" / "example-robot-data")
-    import sys
-
-    for entry in sys.path:
-        candidates.append(Path(entry) / "cmeel.prefix" / "share" / "example-robot-data")
-    for cand in candidates:
-        if (cand / "robots").is_dir():
-            return cand / "robots"
-    raise InvalidDescription(
-        "the example-robot-data package is not installed: `pip install example-robot-data`"
-    )
-
-
-def resolve_base(base: str, folder: Path) -> Path:
-    """Path of an overlay's base URDF: ``example-robot-data:<path in robots/>`` or a file."""
-    if not base:
-        raise InvalidDescription("<pinflex:overlay> needs a base=\"...\" URDF")
-    if base.startswith(ROBOT_DATA_PREFIX):
-        path = robot_data_dir() / base[len(ROBOT_DATA_PREFIX):]
-    else:
-        path = (folder / base).resolve()
-    if not path.is_file():
-        raise InvalidDescription(f"the overlay's base URDF '{base}' was not found at '{path}'")
-    return path
-
-
-def apply_overlay(base_xml: str, overlay: ET.Element) -> str:
-    """Append an overlay's pinflex elements to a base URDF, leaving the base untouched.
-
-    An overlay file reads::
-
-        <pinflex:overlay xmlns:pinflex="urn:pinflex:urdf:1"
-                         base="example-robot-data:ur_description/urdf/ur5_robot.urdf">
-          <pinflex:flexible link="upper_arm_link" ...> ... </pinflex:flexible>
-        </pinflex:overlay>
-
-    The returned text is the base URDF with the annotations as extra children of ``<robot>``
-    (what an annotated URDF would contain), so Pinocchio still parses it.
-    """
-    ET.register_namespace("pinflex", NAMESPACE)
-    try:
-        root_el = ET.fromstring(base_xml)
-    except ET.ParseError as exc:
-        raise InvalidDescription(f"the overlay's base URDF is not well-formed XML: {exc}") from exc
-    for child in overlay:
-        root_el.append(child)
-    if overlay.get("name"):
-        root_el.set("name", overlay.get("name"))
-    return ET.tostring(root_el, encoding="unicode")
 
 
 def parse(urdf_xml: str, base_dir: Path | None = None) -> RobotDescription:
@@ -355,10 +104,6 @@ def parse(urdf_xml: str, base_dir: Path | None = None) -> RobotDescription:
         child_joints={k: tuple(v) for k, v in child_joints.items()},
         parent_joint=parent_joint,
     )
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def _vec(text: str | None, default: str, what: str) -> np.ndarray:

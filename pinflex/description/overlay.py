@@ -1,0 +1,70 @@
+"""Overlay files: an upstream URDF used unchanged, plus pinflex annotations."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from pinflex.description.types import NAMESPACE
+from pinflex.exceptions import InvalidDescription
+
+ROBOT_DATA_PREFIX = "example-robot-data:"
+
+
+def robot_data_dir() -> Path:
+    """The ``robots/`` folder of the installed example-robot-data package."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("cmeel")
+    candidates = []
+    if spec is not None and spec.submodule_search_locations:
+        for loc in spec.submodule_search_locations:
+            candidates.append(Path(loc).parent / "cmeel.prefix" / "share" / "example-robot-data")
+    import sys
+
+    for entry in sys.path:
+        candidates.append(Path(entry) / "cmeel.prefix" / "share" / "example-robot-data")
+    for cand in candidates:
+        if (cand / "robots").is_dir():
+            return cand / "robots"
+    raise InvalidDescription(
+        "the example-robot-data package is not installed: `pip install example-robot-data`"
+    )
+
+
+def resolve_base(base: str, folder: Path) -> Path:
+    """Path of an overlay's base URDF: ``example-robot-data:<path in robots/>`` or a file."""
+    if not base:
+        raise InvalidDescription("<pinflex:overlay> needs a base=\"...\" URDF")
+    if base.startswith(ROBOT_DATA_PREFIX):
+        path = robot_data_dir() / base[len(ROBOT_DATA_PREFIX):]
+    else:
+        path = (folder / base).resolve()
+    if not path.is_file():
+        raise InvalidDescription(f"the overlay's base URDF '{base}' was not found at '{path}'")
+    return path
+
+
+def apply_overlay(base_xml: str, overlay: ET.Element) -> str:
+    """Append an overlay's pinflex elements to a base URDF, leaving the base untouched.
+
+    An overlay file reads::
+
+        <pinflex:overlay xmlns:pinflex="urn:pinflex:urdf:1"
+                         base="example-robot-data:ur_description/urdf/ur5_robot.urdf">
+          <pinflex:flexible link="upper_arm_link" ...> ... </pinflex:flexible>
+        </pinflex:overlay>
+
+    The returned text is the base URDF with the annotations as extra children of ``<robot>``
+    (what an annotated URDF would contain), so Pinocchio still parses it.
+    """
+    ET.register_namespace("pinflex", NAMESPACE)
+    try:
+        root_el = ET.fromstring(base_xml)
+    except ET.ParseError as exc:
+        raise InvalidDescription(f"the overlay's base URDF is not well-formed XML: {exc}") from exc
+    for child in overlay:
+        root_el.append(child)
+    if overlay.get("name"):
+        root_el.set("name", overlay.get("name"))
+    return ET.tostring(root_el, encoding="unicode")

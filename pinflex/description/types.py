@@ -1,0 +1,174 @@
+"""The robot description's dataclasses: joints, inertias, flexible links, point masses."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pinflex import beam
+from pinflex.exceptions import JointNotFound, LinkNotFound
+from pinflex.kinematics import skew as _skew
+
+NAMESPACE = "urn:pinflex:urdf:1"
+_NS = "{" + NAMESPACE + "}"
+
+MOVING_JOINTS = ("revolute", "continuous", "prismatic")
+SUPPORTED_JOINTS = MOVING_JOINTS + ("fixed",)
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A URDF joint.
+
+    Attributes:
+        name: Joint name.
+        type: 'revolute', 'continuous', 'prismatic' or 'fixed'.
+        parent: Parent link name.
+        child: Child link name.
+        xyz: Origin of the joint frame in the parent link frame [m], (3,).
+        rotation: Rotation of the joint frame in the parent link frame, (3, 3).
+        axis: Unit joint axis in the joint frame, (3,).
+        lower: Lower position limit [rad or m] (-inf when absent).
+        upper: Upper position limit [rad or m] (+inf when absent).
+    """
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    xyz: np.ndarray
+    rotation: np.ndarray
+    axis: np.ndarray
+    lower: float = -np.inf
+    upper: float = np.inf
+
+
+@dataclass(frozen=True)
+class RigidInertia:
+    """URDF inertial of a link, expressed at the link frame origin in link axes.
+
+    Attributes:
+        mass: Mass [kg].
+        com: Centre of mass [m], (3,).
+        inertia: Rotational inertia about the centre of mass in link axes [kg m^2], (3, 3).
+    """
+
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray
+
+    def spatial_matrix(self) -> np.ndarray:
+        """6×6 spatial inertia at the link origin, ordering (linear, angular)."""
+        c = self.com
+        cx = _skew(c)
+        out = np.zeros((6, 6))
+        out[:3, :3] = self.mass * np.eye(3)
+        out[:3, 3:] = -self.mass * cx
+        out[3:, :3] = self.mass * cx
+        out[3:, 3:] = self.inertia - self.mass * cx @ cx
+        return out
+
+
+@dataclass(frozen=True)
+class FlexibleLink:
+    """A link modelled as a straight finite-element beam.
+
+    Attributes:
+        link: URDF link name.
+        elements: Number of equal beam elements.
+        tip: Beam end point in the link frame [m], (3,); the beam starts at the link origin.
+        normal: Unit vector in the link frame, the beam's z axis (normal to the beam).
+        E: Young's modulus [Pa].
+        G: Shear modulus [Pa].
+        rhoA: Mass per unit length [kg/m].
+        rhoIp: Torsional rotary inertia per unit length [kg m].
+        section: Cross-section properties.
+    """
+
+    link: str
+    elements: int
+    tip: np.ndarray
+    normal: np.ndarray
+    E: float
+    G: float
+    rhoA: float
+    rhoIp: float
+    section: beam.Section
+
+    @property
+    def length_m(self) -> float:
+        """Beam length [m]."""
+        return float(np.linalg.norm(self.tip))
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """Beam axes in the link frame, columns (x, y, z), (3, 3)."""
+        x = self.tip / self.length_m
+        z = self.normal
+        return np.column_stack([x, np.cross(z, x), z])
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A point mass on a link.
+
+    Attributes:
+        name: Unique name.
+        link: Link carrying the mass.
+        xyz: Position in the link frame [m], (3,).
+        mass: Nominal mass [kg].
+        design: Whether the mass is a design variable.
+        lower: Lower bound of the design variable [kg].
+        upper: Upper bound of the design variable [kg].
+    """
+
+    name: str
+    link: str
+    xyz: np.ndarray
+    mass: float
+    design: bool = False
+    lower: float = 0.0
+    upper: float = np.inf
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """Everything pinflex reads from an annotated URDF.
+
+    Attributes:
+        name: Robot name.
+        urdf_xml: The URDF text that Pinocchio parses.
+        base_dir: Folder of the file, for relative mesh paths.
+        root: Name of the root link (clamped to the ground).
+        links: Link names in file order.
+        joints: Joints by name.
+        inertias: URDF inertials by link name (links without one are absent).
+        flexible: Flexible links by link name.
+        point_masses: Point masses in file order.
+        absolute_coordinates: Whether user coordinates are absolute link angles.
+    """
+
+    name: str
+    urdf_xml: str
+    base_dir: Path | None
+    root: str
+    links: tuple[str, ...]
+    joints: dict[str, Joint]
+    inertias: dict[str, RigidInertia]
+    flexible: dict[str, FlexibleLink]
+    point_masses: tuple[PointMass, ...]
+    absolute_coordinates: bool = False
+    child_joints: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    parent_joint: dict[str, str] = field(default_factory=dict)
+
+    def require_link(self, name: str) -> None:
+        """Raise :class:`LinkNotFound` unless ``name`` is a link."""
+        if name not in self.links:
+            raise LinkNotFound(name, self.links)
+
+    def require_joint(self, name: str) -> None:
+        """Raise :class:`JointNotFound` unless ``name`` is a joint."""
+        if name not in self.joints:
+            raise JointNotFound(name, self.joints)
