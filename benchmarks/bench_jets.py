@@ -11,10 +11,9 @@ pairs of the same size. The matrix jets are synthetic (random, with coefficients
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import scipy.linalg
+from timing import best_of
 
 from pinflex import jets
 from pinflex.taylor_eig import eigen_jets
@@ -24,17 +23,6 @@ N_RIGID = 2
 N_VARS = 4
 MODES = [2, 3, 4]
 N_SAMPLES = 152
-
-
-def best_of(fn, repeat=7, number=1):
-    """Best wall time of ``number`` calls over ``repeat`` runs [s per call]."""
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - t0) / number)
-    return min(times)
 
 
 def synthetic_pencil(space, rng):

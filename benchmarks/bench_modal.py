@@ -9,26 +9,15 @@ the time of exact frequencies along 152 poses against the bare generalized eigen
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+from timing import best_of
 
 from pinflex.erls import FlexibleModel
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def best_of(fn, repeat=7, number=1):
-    """Best wall time of ``number`` calls over ``repeat`` runs [s per call]."""
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - t0) / number)
-    return min(times)
 
 
 def one_pose(name, model, q):

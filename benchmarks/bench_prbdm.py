@@ -8,9 +8,9 @@ PNG (``--out``, default ``prbdm_speed_accuracy.png`` in the working directory).
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
+from timing import best_of as best_time
 
 from pinflex.prbdm.beams import equivalent_bending_stiffness, random_beam, uniform_beam
 from pinflex.prbdm.chain import build_chain, chain_frequencies, mass_matrix_condition, tip_jacobian
@@ -23,17 +23,6 @@ MATTIASSON = {1.0: (0.30172, 0.05643), 2.0: (0.49346, 0.16064), 5.0: (0.71379, 0
               10.0: (0.81061, 0.55500)}
 PAPER_EIGEN = {4: 0.0327, 5: 0.0283}  # percent, Tables 3-4
 PAPER_COMBINED = {3: 59.8087, 4: 12.9613, 5: 10.1844}  # percent, Table 5
-
-
-def best_time(func, repeat: int = 5, number: int = 1) -> float:
-    """Smallest mean wall time of ``number`` calls over ``repeat`` runs [s]."""
-    best = np.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        for _ in range(number):
-            func()
-        best = min(best, (time.perf_counter() - start) / number)
-    return best
 
 
 def section_truth() -> None:

@@ -16,12 +16,12 @@ evaluation time per sample, next to the exact eigensolve).
 from __future__ import annotations
 
 import argparse
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
+from timing import best_of
 
 from pinflex.config import user_trajectory
 from pinflex.erls import FlexibleModel
@@ -30,16 +30,6 @@ from pinflex.parametric import expand, sample
 ROOT = Path(__file__).resolve().parents[1]
 Q0 = np.array([1.817, 5.312])
 PAPER = {("traj", False): 0.09, ("traj", True): 1.64, ("y", False): 0.05, ("y", True): 1.34}
-
-
-def best_of(fn, repeat=7):
-    """Best wall time of one call [s]."""
-    best = np.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def main():
