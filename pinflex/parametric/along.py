@@ -7,9 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pinflex import jets
 from pinflex.erls import FlexibleModel
 from pinflex.jets import JetSpace
-from pinflex.parametric.model import TaylorModel, _monomials, expand
+from pinflex.parametric.model import TaylorModel, expand
 
 
 @dataclass(frozen=True)
@@ -166,7 +167,7 @@ def sample(tm: TaylorModel, Q, *, quantity: str = "freq_hz",
     if nj:
         qspace = JetSpace(nj, tm.order)
         dq = tm.offsets(Q, None, warn=True)[:, :nj]
-        mon_q = _monomials(qspace, dq)  # (ns, ncq)
+        mon_q = jets.monomials(qspace, dq)  # (ns, ncq)
         qpos = np.array([qspace.index[tuple(a)] for a in mi[:, :nj].tolist()])
     else:
         mon_q = np.ones((Q.shape[0], 1))

@@ -16,21 +16,6 @@ from pinflex.parametric.matrices import matrix_jets
 from pinflex.taylor_eig import eigen_jets
 
 
-def _monomials(space: JetSpace, dx: np.ndarray) -> np.ndarray:
-    """Monomials (n, ncoef) of offsets (n, nvars): powers by cumulative products, then gathers."""
-    n, nv = dx.shape
-    powers = np.empty((nv, space.order + 1, n))
-    powers[:, 0] = 1.0
-    if space.order:
-        np.cumprod(np.repeat(dx.T[:, None, :], space.order, axis=1), axis=1,
-                   out=powers[:, 1:])
-    mi = space.multi_indices
-    mon = powers[0, mi[:, 0]]
-    for k in range(1, nv):
-        mon *= powers[k, mi[:, k]]
-    return mon.T
-
-
 @dataclass(frozen=True)
 class TaylorModel:
     """Taylor polynomials of eigenvalues around ``(q0, y0)`` (paper 000 eq. 4 and 7–9).
@@ -155,7 +140,7 @@ class TaylorModel:
         """
         coef = self._coefficients(quantity, bool(linear_in_design))
         dx = self.offsets(Q, Y, warn=warn)
-        return _monomials(self.space, dx) @ coef
+        return jets.monomials(self.space, dx) @ coef
 
     def _coefficients(self, quantity: str, linear: bool) -> np.ndarray:
         """Coefficient matrix (ncoef, k) of a polynomial, cached."""
