@@ -111,7 +111,9 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
     if q.ndim != 1:
         raise ConfigurationError("modes() takes one pose; use frequencies() for many")
     y = model.check_y(y, bounds=check_bounds)
-    M, K = model.matrices(q, y, check_bounds=check_bounds)
+    terms = model.pose_terms(q[None])
+    M, K = model.matrices_from_terms(terms, y, 1)
+    M, K = M[0], K[0]
     nx = model.nx
     Mred, Kxx = reduced(model, M, K)
     k = nx if n_modes is None else min(int(n_modes), nx)
@@ -124,16 +126,20 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
     # sign: largest elastic component positive
     idx = np.argmax(np.abs(phix), axis=0)
     shapes *= np.sign(phix[idx, np.arange(k)])[None, :]
-    positions, motion, elastic = node_fields(model, q, shapes)
+    positions, motion, elastic = node_fields(model, q, shapes, terms)
     return ModalResult(
         q=q, y=y, ndof=model.ndof, rigid_modes=model.nv, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
     )
 
 
-def node_fields(model, q: np.ndarray, shapes: np.ndarray):
-    """World node positions, total and elastic nodal motion of mode shapes at pose q."""
-    terms = model.pose_terms(q[None])
+def node_fields(model, q: np.ndarray, shapes: np.ndarray, terms=None):
+    """World node positions, total and elastic nodal motion of mode shapes at pose q.
+
+    ``terms`` are the pose terms of ``q`` when the caller already has them.
+    """
+    if terms is None:
+        terms = model.pose_terms(q[None])
     twist = model._root_twists(terms, BatchAlgebra(1))
     pin.framesForwardKinematics(model.model, model.data, model.pin_configuration(q))
     positions, motion, elastic = {}, {}, {}

@@ -53,6 +53,15 @@ from pinflex.exceptions import (
 from pinflex.kinematics import axis_rotation, translate_twist
 
 
+def add_design_masses(M0: np.ndarray, Md: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``M = M0 + Σ_j y_j Md_j`` for one design (ny,) or one per pose (n, ny)."""
+    if Md.shape[0] == 0:
+        return M0
+    if y.ndim == 1:
+        return M0 + np.tensordot(y, Md, axes=(0, 0))
+    return M0 + np.einsum("nj,jnab->nab", y, Md)
+
+
 class FlexibleModel:
     """A URDF arm whose annotated links are finite-element beams (ERLS).
 
@@ -297,11 +306,10 @@ class FlexibleModel:
 
     @staticmethod
     def _twist_at(alg, att: _Attachment, root_twist):
-        has_const = np.any(att.const)
         if root_twist is None or att.lin is None:
-            return alg.const(att.const) if has_const else None
+            return None if att.const is None else alg.const(att.const)
         out = att.lin @ root_twist
-        return out + alg.const(att.const) if has_const else out
+        return out if att.const is None else out + alg.const(att.const)
 
     def matrices(self, Q, y=None, *, check_bounds: bool = True):
         """Mass and stiffness matrices at one pose (nv,) or many (n, nv).
@@ -322,13 +330,13 @@ class FlexibleModel:
             raise ConfigurationError(
                 f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
             )
-        M0, Md, K = self.assemble(self.pose_terms(Qb), BatchAlgebra(Qb.shape[0]))
-        if self.ny:
-            M = M0 + (np.tensordot(y, Md, axes=(0, 0)) if y.ndim == 1
-                      else np.einsum("nj,jnab->nab", y, Md))
-        else:
-            M = M0
+        M, K = self.matrices_from_terms(self.pose_terms(Qb), y, Qb.shape[0])
         return (M[0], K[0]) if single else (M, K)
+
+    def matrices_from_terms(self, terms: _PoseTerms, y: np.ndarray, n_poses: int):
+        """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs."""
+        M0, Md, K = self.assemble(terms, BatchAlgebra(n_poses))
+        return add_design_masses(M0, Md, y), K
 
     # ------------------------------------------------------------------ modal analysis
     def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True):

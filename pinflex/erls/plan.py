@@ -158,7 +158,7 @@ def attachment(model, link: str, point: np.ndarray) -> _Attachment:
     """Elastic twist of a point given in the frame of ``link`` (in link axes)."""
     plan = model._flex.get(link)
     if plan is None:
-        return _Attachment(np.zeros((6, model.nx)), translate_twist(point))
+        return _Attachment(None, translate_twist(point))
     spec = plan.spec
     L, n = spec.length_m, spec.elements
     xdir = spec.tip / L
@@ -172,7 +172,7 @@ def attachment(model, link: str, point: np.ndarray) -> _Attachment:
     rows = slice(6 * e, 6 * e + 12)
     const = to_link @ shape @ plan.sel[rows]
     lin = to_link @ shape @ plan.root[rows] if e == 0 else None
-    return _Attachment(const, lin)
+    return _Attachment(const if np.any(const) else None, lin)
 
 
 def check_planar(model) -> None:

@@ -47,7 +47,7 @@ class _FlexPlan:
 class _Attachment:
     """Elastic twist at a point of a link = const + lin @ (twist of the link root)."""
 
-    const: np.ndarray  # (6, nx)
+    const: np.ndarray | None  # (6, nx), or None when the point has no own elastic dofs
     lin: np.ndarray | None  # (6, 6) or None when the point does not see the root twist
 
 
