@@ -30,7 +30,8 @@ from pinflex.assignment_qp import (
     solve_assignment_qp,
 )
 from pinflex.erls import FlexibleModel
-from pinflex.exceptions import AssignmentWarning, ConfigurationError, TrajectoryWarning
+from pinflex.erls.model import add_design_masses
+from pinflex.exceptions import AssignmentWarning, ConfigurationError
 from pinflex.parametric import TaylorModel, expand
 from pinflex.trajectory import Trajectory
 
@@ -101,21 +102,15 @@ def _target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
     return out
 
 
-def check_trajectory_limits(model: FlexibleModel, Q: np.ndarray) -> None:
-    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits."""
-    qp = Q @ model.coord_map.T
-    for k, name in enumerate(model.joint_names):
-        jd = model.description.joints[name]
-        bad = (qp[:, k] < jd.lower - 1e-9) | (qp[:, k] > jd.upper + 1e-9)
-        if np.any(bad):
-            first = int(np.argmax(bad))
-            warnings.warn(
-                f"the trajectory leaves the limits [{jd.lower:g}, {jd.upper:g}] of joint "
-                f"'{name}' at {int(bad.sum())} samples (first: sample {first}, value "
-                f"{qp[first, k]:.6g}); the answer is computed but the motion is not feasible",
-                TrajectoryWarning,
-                stacklevel=3,
-            )
+def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> None:
+    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits.
+
+    The samples are converted to Pinocchio's joint values, which the limits refer to, and
+    checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off).
+    """
+    joints = [model.description.joints[name] for name in model.joint_names]
+    in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
+    in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
 
 
 def build_assignment(
@@ -265,7 +260,7 @@ def assign_frequencies(
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     Q = model.check_q(trajectory.q)
-    check_trajectory_limits(model, Q)
+    check_trajectory_limits(model, trajectory)
     if y_before is None:
         y_before = np.array([d.lower for d in model.design])
     y_before = model.check_y(y_before)
@@ -391,7 +386,7 @@ def exact_cost(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[T
     nmax = max(t.mode for t in targets)
     costs, errs = np.empty(len(Y)), np.empty(len(Y))
     for i, y in enumerate(np.atleast_2d(Y)):
-        M = M0 + np.tensordot(y, Md, axes=(0, 0))
+        M = add_design_masses(M0, Md, y)
         lam = model.eigvals_from(M, K)[:, :nmax]
         f = np.sqrt(lam) / (2 * np.pi)
         cost, err = 0.0, 0.0

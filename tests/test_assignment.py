@@ -128,7 +128,7 @@ def test_trajectory_outside_joint_limits_warns(setup):
     q[:, 0] += 8.0  # base angle beyond its ±6.2832 rad limit
     q[:, 1] += 8.0  # keep the relative elbow angle
     bad = Trajectory(traj.times_s, q, traj.joint_names)
-    with pytest.warns(TrajectoryWarning, match="'q1'"):
+    with pytest.warns(TrajectoryWarning, match="q1 = "):
         assign_frequencies(model, bad, [Target(1, 190.0)], q0=q[76])
 
 
