@@ -15,6 +15,8 @@ from pinflex.assignment import (
 from pinflex.description import RobotDescription, load
 from pinflex.erls import FlexibleModel, ModalResult
 from pinflex.exceptions import PinflexError, PinflexWarning
+from pinflex.native.robots import example_robot
+from pinflex.native.spec import Beam, Mass, Material
 from pinflex.parametric import TaylorModel, expand, matrix_jets
 from pinflex.trajectory import Trajectory
 
@@ -22,7 +24,10 @@ __version__ = "0.1.0"
 
 __all__ = [
     "AssignmentResult",
+    "Beam",
     "FlexibleModel",
+    "Mass",
+    "Material",
     "ModalResult",
     "PinflexError",
     "PinflexWarning",
@@ -34,6 +39,7 @@ __all__ = [
     "assign_frequencies",
     "brute_force",
     "build_assignment",
+    "example_robot",
     "expand",
     "load",
     "matrix_jets",

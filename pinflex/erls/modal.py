@@ -48,6 +48,29 @@ class ModalResult:
         """Eigenfrequencies [Hz] of the non-rigid modes, ascending."""
         return np.sqrt(self.eigvals) / (2.0 * np.pi)
 
+    def __repr__(self) -> str:
+        """A short table: pose, design, and one line per mode."""
+        def vec(v, unit=""):
+            return "[" + ", ".join(f"{x:.4g}" for x in np.ravel(v)) + "]" + unit
+
+        lines = [
+            f"ModalResult({self.eigvals.size} modes, {self.rigid_modes} rigid, "
+            f"ndof={self.ndof})",
+            f"  q = {vec(self.q)}",
+        ]
+        if np.size(self.y):
+            lines.append(f"  y = {vec(self.y, ' kg')}")
+        lines.append(f"  {'mode':>4}  {'f [Hz]':>12}  {'omega [rad/s]':>14}")
+        shown = self.eigvals.size if self.eigvals.size <= 12 else 10
+        for k in range(shown):
+            lines.append(f"  {k + 1:>4}  {self.freq_hz[k]:>12.6g}  {self.omega_rad_s[k]:>14.6g}")
+        if shown < self.eigvals.size:
+            lines.append(
+                f"  ... {self.eigvals.size - shown} more (up to {self.freq_hz[-1]:.6g} Hz); "
+                "see .freq_hz"
+            )
+        return "\n".join(lines)
+
 
 def reduced(model, M: np.ndarray, K: np.ndarray):
     """Elastic mass with the rigid coordinates condensed out, and Kxx."""

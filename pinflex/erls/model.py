@@ -119,6 +119,65 @@ class FlexibleModel:
             self.set_value(name, value)
         plan.build_plan(self)
 
+    @classmethod
+    def from_pinocchio(
+        cls,
+        model_or_robot,
+        flexible: dict | None = None,
+        masses: dict | None = None,
+        joints=None,
+        **kwargs,
+    ) -> FlexibleModel:
+        """A flexible model of a Pinocchio ``Model`` or ``RobotWrapper`` kept in memory.
+
+        The model's tree and inertias are written out as URDF (see
+        :func:`pinflex.native.urdf.urdf_from_model`) and annotated from the Python
+        specifications, so the result equals the overlay route on the same arm to round-off.
+
+        Args:
+            model_or_robot: A fixed-base ``pinocchio.Model`` or ``RobotWrapper`` with revolute,
+                continuous or prismatic joints.
+            flexible: ``{link or joint name: pinflex.Beam}``; a joint name stands for the link
+                it carries.
+            masses: ``{name: pinflex.Mass}`` point masses [kg, m].
+            joints: Joint condition of the modal model; ``None``/``"free"``: free joints.
+            **kwargs: ``planar``, ``values``, ``coordinates`` as for the constructor.
+
+        Example::
+
+            arm = FlexibleModel.from_pinocchio(robot, flexible={"upper_arm_link": Beam(...)})
+        """
+        from pinflex.native.robots import from_pinocchio
+
+        return from_pinocchio(model_or_robot, flexible, masses, joints, **kwargs)
+
+    def effective_inertias(self) -> dict:
+        """Rigid-body inertia of every flexible link as the modal model sees it.
+
+        ``self.model`` (the Pinocchio model) keeps the URDF inertias of all links, also of the
+        links the modal model replaces by beams; this gives the beams' own inertias instead.
+
+        Returns:
+            ``{link: pinocchio.Inertia}`` at the link frame origin in link axes [kg, m, kg m²].
+        """
+        from pinflex.native.effective import effective_inertias
+
+        return effective_inertias(self)
+
+    def effective_model(self, y=None, *, point_masses: bool = True):
+        """Copy of ``self.model`` whose flexible links carry their beams' inertias.
+
+        Use it for rigid-body dynamics consistent with the modal model: ``pin.crba`` of it
+        equals the rigid block ``M[nx:, nx:]`` of :meth:`matrices` (relative coordinates).
+
+        Args:
+            y: Design values [kg] of design point masses (default: nominal).
+            point_masses: Add the point masses to the links carrying them.
+        """
+        from pinflex.native.effective import effective_model
+
+        return effective_model(self, y, point_masses=point_masses)
+
     # ------------------------------------------------------------------ set-up
     def set_value(self, name: str, value: float) -> None:
         """Set the nominal value of a point mass [kg]."""
@@ -154,16 +213,61 @@ class FlexibleModel:
         return len(self.design)
 
     def check_q(self, q) -> np.ndarray:
-        """Validate joint coordinates (nv,) or (n, nv) and return them as an array."""
+        """Validate joint coordinates and return them as user coordinates (nv,) or (n, nv).
+
+        Accepts one value per moving joint (length ``nv``, the user convention) or a Pinocchio
+        configuration vector (length ``nq``, which differs from ``nv`` when the arm has
+        continuous joints, stored as ``(cos θ, sin θ)``); see :meth:`from_configuration`.
+        """
         q = np.asarray(q, dtype=float)
+        if q.ndim in (1, 2) and q.shape[-1] == self.model.nq != self.nv:
+            return self.from_configuration(q)
         if q.shape[-1:] != (self.nv,) or q.ndim not in (1, 2):
+            extra = f" or a Pinocchio configuration of {self.model.nq}" if (
+                self.model.nq != self.nv
+            ) else ""
             raise ConfigurationError(
-                f"expected {self.nv} joint values ({', '.join(self.joint_names)}) per pose, "
-                f"got an array of shape {q.shape}"
+                f"expected {self.nv} joint values ({', '.join(self.joint_names)}){extra} per "
+                f"pose, got an array of shape {q.shape}"
             )
         if not np.all(np.isfinite(q)):
             raise ConfigurationError("joint values must be finite")
         return q
+
+    def from_configuration(self, qpin) -> np.ndarray:
+        """User coordinates (nv,) or (n, nv) of Pinocchio configuration vectors (nq,) or (n, nq).
+
+        A continuous joint's ``(cos θ, sin θ)`` pair becomes ``θ = atan2(sin θ, cos θ)`` in
+        (-π, π]; other joints copy their value. The relative joint values are then mapped to
+        the model's user convention (``q_user = C⁻¹ q_rel``, the identity for relative
+        coordinates). Inverse of :meth:`pin_configuration` up to multiples of 2π.
+
+        Raises:
+            ConfigurationError: Wrong length, non-finite values, or a (cos, sin) pair whose
+                norm is not 1 (to 1e-6).
+        """
+        qpin = np.asarray(qpin, dtype=float)
+        if qpin.shape[-1:] != (self.model.nq,) or qpin.ndim not in (1, 2):
+            raise ConfigurationError(
+                f"expected Pinocchio configurations of length nq = {self.model.nq}, got shape "
+                f"{qpin.shape}"
+            )
+        if not np.all(np.isfinite(qpin)):
+            raise ConfigurationError("joint values must be finite")
+        qrel = np.zeros(qpin.shape[:-1] + (self.nv,))
+        for j in range(1, self.model.njoints):
+            jm = self.model.joints[j]
+            if jm.nq == 2:
+                c, s = qpin[..., jm.idx_q], qpin[..., jm.idx_q + 1]
+                if np.any(np.abs(np.hypot(c, s) - 1.0) > 1e-6):
+                    raise ConfigurationError(
+                        f"continuous joint '{self.model.names[j]}': (cos, sin) = "
+                        f"({np.ravel(c)[0]!r}, {np.ravel(s)[0]!r}) is not a unit vector"
+                    )
+                qrel[..., jm.idx_v] = np.arctan2(s, c)
+            else:
+                qrel[..., jm.idx_v] = qpin[..., jm.idx_q]
+        return np.linalg.solve(self.coord_map, qrel[..., None])[..., 0]
 
     def check_y(self, y, *, bounds: bool = True) -> np.ndarray:
         """Validate design values (ny,) or per-pose (n, ny); ``None`` gives the nominal ones."""
@@ -342,7 +446,21 @@ class FlexibleModel:
     def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
         """Non-rigid eigenfrequencies [Hz] at one pose (k,) or many (n, k), ascending.
 
-        Batched: all poses are assembled and solved together.
+        Batched: all poses are assembled and solved together. Frequencies are sorted at each
+        pose, so mode ``i`` is the ``i``-th lowest, not a mode followed by its shape (for that,
+        see :mod:`pinflex.tracking` where available).
+
+        Args:
+            Q: Joint coordinates, one pose (nv,) or many (n, nv), in the user convention
+                [rad or m]; Pinocchio configurations (nq,) are accepted and converted
+                (:meth:`from_configuration`).
+            y: Design values [kg], (ny,), per pose (n, ny), a ``{name: kg}`` dict, or ``None``
+                for the nominal ones.
+            n_modes: Keep the lowest ``n_modes`` (default: all ``nx``).
+            check_bounds: Raise :class:`DesignVariableOutOfBounds` outside the bounds.
+
+        Returns:
+            Frequencies [Hz], (k,) or (n, k).
         """
         return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds)
 
@@ -351,5 +469,26 @@ class FlexibleModel:
         return modal.eigvals_from(self, M, K)
 
     def modes(self, q, y=None, *, n_modes: int | None = None, check_bounds=True):
-        """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose."""
+        """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
+
+        Solves ``Kₓₓ φₓ = λ (Mₓₓ − Mₓq Mqq⁻¹ Mqx) φₓ`` (rigid coordinates condensed out, joints
+        free) and recovers the joint part ``φq = −Mqq⁻¹ Mqx φₓ``.
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m], or a Pinocchio
+                configuration (nq,) (continuous joints as cos/sin, converted by
+                :meth:`from_configuration`).
+            y: Design values [kg] (default: nominal); ``{name: kg}`` accepted.
+            n_modes: Number of lowest modes to compute (default: all ``nx``).
+            check_bounds: Raise when a design value leaves its bounds.
+
+        Returns:
+            :class:`ModalResult`: ``freq_hz`` [Hz], ``eigvals`` [rad²/s²], ``shapes`` over
+            ``[x; q]`` (ndof, k) normalised to ``φᵀ M φ = 1``, nodal positions [m] and motion.
+            ``print(result)`` shows a short table.
+
+        Raises:
+            ConfigurationError: Wrong number of joint values or several poses.
+            EigenSolverError: Singular mass matrix or an unrestrained structure.
+        """
         return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds)

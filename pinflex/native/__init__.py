@@ -1,0 +1,1 @@
+"""Pinocchio-native entry points: Python specifications of flexible links, models in memory."""

@@ -1,0 +1,228 @@
+"""URDF text of a Pinocchio model kept in memory.
+
+A ``pin.Model`` has no URDF attached to it. :func:`urdf_from_model` writes one that Pinocchio
+parses back into the same kinematic tree with the same inertias, so that the rest of pinflex
+(which reads a description, see :mod:`pinflex.description`) can work on models that were built
+in Python or loaded by another tool.
+
+Links are the model's BODY frames; joints its moving joints plus its FIXED_JOINT frames.
+Pinocchio merges the inertia of links attached through fixed joints into the moving joint that
+carries them and keeps each such link's own inertia on its fixed-joint frame; the writer splits
+them again, so each link gets back its own inertial. A joint without a BODY frame (a model
+built by hand with ``addJoint``/``appendBodyToJoint``) gets a link named after the joint,
+``<joint>_body``.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pinocchio as pin
+
+from pinflex.exceptions import ConfigurationError, UnsupportedJoint
+
+_AXES = {"X": "1 0 0", "Y": "0 1 0", "Z": "0 0 1"}
+
+
+def _num(v: float) -> str:
+    return repr(float(v))
+
+
+def _origin(parent: ET.Element, placement: pin.SE3) -> None:
+    rpy = pin.rpy.matrixToRpy(placement.rotation)
+    ET.SubElement(
+        parent,
+        "origin",
+        {
+            "xyz": " ".join(_num(v) for v in placement.translation),
+            "rpy": " ".join(_num(v) for v in rpy),
+        },
+    )
+
+
+def _joint_kind(jm) -> tuple[str, np.ndarray]:
+    """URDF type and axis of a one-dof Pinocchio joint."""
+    short = jm.shortname()
+    kinds = {
+        "JointModelR": "revolute",
+        "JointModelRUB": "continuous",
+        "JointModelP": "prismatic",
+    }
+    for prefix, kind in kinds.items():
+        if short[:-1] == prefix and short[-1] in _AXES:
+            return kind, np.array([float(t) for t in _AXES[short[-1]].split()])
+    unaligned = {
+        "JointModelRevoluteUnaligned": "revolute",
+        "JointModelRevoluteUnboundedUnaligned": "continuous",
+        "JointModelPrismaticUnaligned": "prismatic",
+    }
+    if short in unaligned:
+        return unaligned[short], np.array(jm.extract().axis, dtype=float)
+    raise UnsupportedJoint(
+        f"Pinocchio joint type {short} is not supported; pinflex handles revolute, continuous "
+        "and prismatic joints (one degree of freedom each) on a fixed base"
+    )
+
+
+def _inertial(link: ET.Element, inertia: pin.Inertia) -> None:
+    if inertia.mass <= 0.0:
+        return
+    el = ET.SubElement(link, "inertial")
+    ET.SubElement(
+        el, "origin", {"xyz": " ".join(_num(v) for v in inertia.lever), "rpy": "0 0 0"}
+    )
+    ET.SubElement(el, "mass", {"value": _num(inertia.mass)})
+    I3 = inertia.inertia
+    ET.SubElement(
+        el,
+        "inertia",
+        {
+            "ixx": _num(I3[0, 0]), "ixy": _num(I3[0, 1]), "ixz": _num(I3[0, 2]),
+            "iyy": _num(I3[1, 1]), "iyz": _num(I3[1, 2]), "izz": _num(I3[2, 2]),
+        },
+    )
+
+
+def _spatial(inertia: pin.Inertia) -> np.ndarray:
+    return np.array(inertia.matrix())
+
+
+def _from_spatial(S: np.ndarray) -> pin.Inertia:
+    """pin.Inertia of a 6x6 spatial inertia (linear, angular) at the frame origin."""
+    m = float(S[0, 0])
+    if m <= 1e-14 * max(1.0, float(np.abs(S).max())):
+        return pin.Inertia.Zero()
+    mc = S[3:, :3]  # m [c]x
+    c = np.array([mc[2, 1], mc[0, 2], mc[1, 0]]) / m
+    cx = pin.skew(c)
+    return pin.Inertia(m, c, S[3:, 3:] + m * cx @ cx)
+
+
+def link_names(model: pin.Model) -> tuple[str, dict[int, str]]:
+    """Root link name and the link carried by each moving joint (by joint index)."""
+    frames = model.frames
+    root = "universe"
+    for f in frames:
+        if f.type == pin.FrameType.BODY and f.parentJoint == 0 and f.parentFrame == 0:
+            root = f.name
+            break
+    child: dict[int, str] = {}
+    for j in range(1, model.njoints):
+        name = model.names[j]
+        for fid, f in enumerate(frames):
+            if f.type == pin.FrameType.JOINT and f.name == name and f.parentJoint == j:
+                for g in frames:
+                    if g.type == pin.FrameType.BODY and g.parentFrame == fid:
+                        child[j] = g.name
+                        break
+                break
+        if j not in child:
+            for g in frames:
+                if (
+                    g.type == pin.FrameType.BODY
+                    and g.parentJoint == j
+                    and g.placement.isIdentity()
+                ):
+                    child[j] = g.name
+                    break
+        child.setdefault(j, f"{name}_body")
+    return root, child
+
+
+def urdf_from_model(model: pin.Model, name: str | None = None) -> str:
+    """URDF text that Pinocchio parses into the same kinematic tree and inertias.
+
+    Args:
+        model: A fixed-base Pinocchio model with one-dof joints (revolute, continuous,
+            prismatic, aligned or not).
+        name: Robot name (default: ``model.name`` or ``"robot"``).
+
+    Returns:
+        The URDF text (no visual or collision geometry).
+
+    Raises:
+        UnsupportedJoint: A joint with more than one degree of freedom (free flyer, spherical,
+            planar, ...) or a type without a URDF equivalent.
+    """
+    if not isinstance(model, pin.Model):
+        raise ConfigurationError(
+            f"expected a pinocchio.Model or RobotWrapper, got {type(model).__name__}"
+        )
+    frames = model.frames
+    root, child = link_names(model)
+    robot = ET.Element("robot", {"name": name or model.name or "robot"})
+    # link of every BODY frame, and its placement in its joint's frame
+    body_of_joint = {0: root, **child}
+    link_placement: dict[str, pin.SE3] = {root: pin.SE3.Identity()}
+    link_joint: dict[str, int] = {root: 0}
+    for j, link in child.items():
+        link_placement[link] = pin.SE3.Identity()
+        link_joint[link] = j
+    for f in frames:
+        if f.type == pin.FrameType.BODY and f.name not in link_placement:
+            link_placement[f.name] = f.placement
+            link_joint[f.name] = f.parentJoint
+    # own inertia of each link: fixed-joint links keep theirs on the fixed-joint frame
+    own: dict[str, np.ndarray] = {}
+    merged = {j: _spatial(model.inertias[j]) for j in range(model.njoints)}
+    fixed = []
+    for fid, f in enumerate(frames):
+        if f.type != pin.FrameType.FIXED_JOINT or fid == 0:
+            continue
+        parent = frames[f.parentFrame]
+        kids = [g.name for g in frames if g.type == pin.FrameType.BODY and g.parentFrame == fid]
+        if parent.type != pin.FrameType.BODY or len(kids) != 1:
+            continue
+        fixed.append((f, parent.name, kids[0]))
+        contribution = _spatial(f.placement.act(f.inertia))
+        own[kids[0]] = _spatial(f.inertia)
+        merged[f.parentJoint] = merged[f.parentJoint] - contribution
+    for j, link in body_of_joint.items():
+        own[link] = merged[j]
+    for link in link_placement:
+        el = ET.SubElement(robot, "link", {"name": link})
+        if link in own:
+            _inertial(el, _from_spatial(own[link]))
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        kind, axis = _joint_kind(jm)
+        jframe = [
+            f for f in frames if f.type == pin.FrameType.JOINT and f.name == model.names[j]
+        ]
+        parent_link = body_of_joint[model.parents[j]]
+        if jframe and frames[jframe[0].parentFrame].type == pin.FrameType.BODY:
+            parent_link = frames[jframe[0].parentFrame].name
+        origin = link_placement[parent_link].actInv(model.jointPlacements[j])
+        el = ET.SubElement(robot, "joint", {"name": model.names[j], "type": kind})
+        _origin(el, origin)
+        ET.SubElement(el, "parent", {"link": parent_link})
+        ET.SubElement(el, "child", {"link": child[j]})
+        ET.SubElement(el, "axis", {"xyz": " ".join(_num(v) for v in axis)})
+        lim = {
+            "effort": _num(model.effortLimit[jm.idx_v]),
+            "velocity": _num(model.velocityLimit[jm.idx_v]),
+        }
+        if kind != "continuous":
+            lo, hi = model.lowerPositionLimit[jm.idx_q], model.upperPositionLimit[jm.idx_q]
+            if np.isfinite(lo) and abs(lo) < 1e300:
+                lim["lower"] = _num(lo)
+            if np.isfinite(hi) and abs(hi) < 1e300:
+                lim["upper"] = _num(hi)
+        ET.SubElement(el, "limit", lim)
+    for f, parent, kid in fixed:
+        el = ET.SubElement(robot, "joint", {"name": f.name, "type": "fixed"})
+        _origin(el, link_placement[parent].actInv(f.placement))
+        ET.SubElement(el, "parent", {"link": parent})
+        ET.SubElement(el, "child", {"link": kid})
+    # BODY frames added by hand without a fixed-joint frame: fixed to their joint's link
+    reached = set(body_of_joint.values()) | {kid for _, _, kid in fixed}
+    for link in link_placement:
+        if link in reached:
+            continue
+        parent = body_of_joint[link_joint[link]]
+        el = ET.SubElement(robot, "joint", {"name": f"{link}_fixed", "type": "fixed"})
+        _origin(el, link_placement[link])
+        ET.SubElement(el, "parent", {"link": parent})
+        ET.SubElement(el, "child", {"link": link})
+    return ET.tostring(robot, encoding="unicode")
