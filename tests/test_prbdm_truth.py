@@ -131,3 +131,45 @@ def test_elastica_rejects_bad_force():
     """A force that is not a finite 2-vector raises InvalidBeam."""
     with pytest.raises(InvalidBeam, match="force_n"):
         elastica_tip(uniform_beam(), np.array([0.0, np.inf]))
+
+
+def _elliptic_cantilever(alpha):
+    """Closed-form elastica of a uniform cantilever under a transverse dead tip load.
+
+    With k^2 = (1 + sin phi_L)/2 and sin phi_1 = 1/(k sqrt 2), the load satisfies
+    sqrt(alpha) = K(k) - F(phi_1, k); the tip sits at x/L = sqrt(2 sin phi_L / alpha) and
+    w/L = 1 - 2 (E(k) - E(phi_1, k)) / sqrt(alpha) (scipy's parameter m = k^2).
+    """
+    from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
+
+    def phi1(m):
+        return np.arcsin(1.0 / np.sqrt(2.0 * m))
+
+    def load(m):
+        return ellipk(m) - ellipkinc(phi1(m), m) - np.sqrt(alpha)
+
+    m = brentq(load, 0.5 + 1e-15, 1.0 - 1e-16, xtol=1e-16, rtol=1e-15)
+    sin_tip = 2.0 * m - 1.0
+    x = np.sqrt(2.0 * sin_tip / alpha)
+    w = 1.0 - 2.0 * (ellipe(m) - ellipeinc(phi1(m), m)) / np.sqrt(alpha)
+    return x, w, np.arcsin(sin_tip)
+
+
+@pytest.mark.parametrize("alpha", [40.0, 100.0, 200.0])
+def test_elastica_follows_stable_branch_to_alpha_200(alpha):
+    """At large loads the elastica stays on the stable branch of the elliptic closed form."""
+    beam, ei, _ = _uniform_reference_hz()
+    sol = elastica_tip(beam, np.array([0.0, -alpha * ei]))
+    x, w, phi = _elliptic_cantilever(alpha)
+    assert sol.tip_m[0] == pytest.approx(x, abs=1e-9)
+    assert -sol.tip_m[1] == pytest.approx(w, abs=1e-9)
+    assert sol.tip_rotation_rad == pytest.approx(phi, abs=1e-9)
+    # Root moment of the dead load P about the clamp is P times the tip's axial position.
+    assert sol.root_moment_nm == pytest.approx(alpha * ei * x, rel=1e-9)
+
+
+def test_elastica_refuses_unstable_straight_column():
+    """An axial compression above the Euler load has no stable answer on the loading path."""
+    beam, ei, _ = _uniform_reference_hz()
+    with pytest.raises(TruthNotConverged):
+        elastica_tip(beam, np.array([-4.0 * ei, 0.0]))

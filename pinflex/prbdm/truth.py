@@ -27,10 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from ..exceptions import InvalidBeam, TruthNotConverged
-from .beams import Planform
+from .beams import Planform, equivalent_bending_stiffness
 
 _GAUSS2 = np.polynomial.legendre.leggauss(2)
 _GAUSS4 = np.polynomial.legendre.leggauss(4)
@@ -327,66 +326,135 @@ class ElasticaSolution:
         return self.tip_m - np.array([self.length_m, 0.0])
 
 
-def _integrate_elastica(planform: Planform, force: np.ndarray, root_moment: float,
-                        rtol: float) -> np.ndarray:
-    """State (x, z, phi, M) at the tip after integrating from the root."""
+def _integrate_elastica(planform: Planform, force: np.ndarray, tip_rotation: float,
+                        rtol: float) -> tuple[np.ndarray, np.ndarray]:
+    r"""Shoot from the free tip to the root for a trial tip rotation.
+
+    Integrates :math:`(x, z, \phi, M)` and the variational pair :math:`(h, \mu)` =
+    :math:`\partial(\phi, M)/\partial\phi_L` backwards from the tip, where :math:`M = 0`,
+    :math:`h = 1`, :math:`\mu = 0`; positions are relative to the tip.
+
+    Returns:
+        The root state (x, z, phi, M, h, mu) and (min phi, max phi, min h) over the beam.
+    """
     fx, fz = force
     e = planform.material.youngs_modulus_pa
 
     def rhs(s, y):
-        return [np.cos(y[2]), -np.sin(y[2]), y[3] / (e * planform.area_moment_m4(s)),
-                np.sin(y[2]) * fx + np.cos(y[2]) * fz]
+        c, sn = np.cos(y[2]), np.sin(y[2])
+        ei = e * planform.area_moment_m4(s)
+        return [c, -sn, y[3] / ei, sn * fx + c * fz, y[5] / ei, (c * fx - sn * fz) * y[4]]
 
-    state = np.array([0.0, 0.0, 0.0, root_moment])
-    for a, b in zip(planform.x_m[:-1], planform.x_m[1:]):
+    state = np.array([0.0, 0.0, tip_rotation, 0.0, 1.0, 0.0])
+    low, high, h_min = tip_rotation, tip_rotation, 1.0
+    for a, b in zip(planform.x_m[:0:-1], planform.x_m[-2::-1]):
         sol = solve_ivp(rhs, (a, b), state, method="DOP853", rtol=rtol, atol=rtol * 1e-3)
         if not sol.success:
-            raise TruthNotConverged(f"elastica integration failed on [{a:g}, {b:g}] m: "
+            raise TruthNotConverged(f"elastica integration failed on [{b:g}, {a:g}] m: "
                                     f"{sol.message}")
         state = sol.y[:, -1]
-    return state
+        low, high = min(low, float(sol.y[2].min())), max(high, float(sol.y[2].max()))
+        h_min = min(h_min, float(sol.y[4].min()))
+    return state, np.array([low, high, h_min])
 
 
-def elastica_tip(planform: Planform, force_n: np.ndarray, rtol: float = 1e-11) -> ElasticaSolution:
+def _elastica_newton(planform: Planform, force: np.ndarray, phi_tip: float, rtol: float,
+                     max_iter: int = 12):
+    """Newton on the clamp condition phi(0) = 0 from tip rotation phi_tip; None if it fails."""
+    for _ in range(max_iter):
+        state, extremes = _integrate_elastica(planform, force, phi_tip, rtol)
+        if not np.all(np.isfinite(state)) or state[4] <= 0.0:
+            return None
+        step = state[2] / state[4]
+        phi_tip = phi_tip - step
+        if abs(step) <= 1e-12:
+            state, extremes = _integrate_elastica(planform, force, phi_tip, rtol)
+            return phi_tip, state, extremes
+    return None
+
+
+def elastica_tip(planform: Planform, force_n: np.ndarray, rtol: float = 1e-11,
+                 max_load_step: float = 2.0) -> ElasticaSolution:
     r"""Geometrically exact planar elastica of the cantilever under a dead tip force.
 
     Equations along the arc length s (x along the beam, z transverse, phi the section rotation
     about +Y so that :math:`z' = -\sin\phi`): :math:`x' = \cos\phi`,
     :math:`\phi' = M / EI(s)`, :math:`M' = F_x \sin\phi + F_z \cos\phi`, with the beam clamped at
-    s = 0 and :math:`M(L) = 0`. The unknown root moment is found by bracketing and Brent's method
-    around the linear estimate :math:`-F_z L`, integrating piecewise between planform vertices.
+    s = 0 (:math:`\phi = 0`) and free at s = L (:math:`M = 0`). The unknown is the tip rotation:
+    shooting from the tip to the root, piecewise between planform vertices, with Newton's
+    method on :math:`\phi(0) = 0` using the exact variational derivative. (Shooting on the
+    root moment instead is ill-conditioned at large loads: its sensitivity grows by orders of
+    magnitude, and a pinched planform amplifies it further.)
+
+    Large loads admit several equilibria (shapes with inflection points, unstable or far from
+    the loading path). The stable branch is followed by continuation in the load from zero:
+    the load grows in steps of at most ``max_load_step`` in :math:`\sqrt{\alpha}`
+    (:math:`\alpha = |F| L^2 / EI_{eq}`), each step predicted by extrapolating the tip rotation;
+    a step whose Newton fails or lands far from the prediction is halved. The answer must be
+    (1) on the physical branch, every section rotation between the undeformed axis and the
+    force direction, and (2) stable: the Jacobi field :math:`h = \partial\phi/\partial\phi_L`,
+    which satisfies the free-end condition, has no zero on the beam (no conjugate point).
+    Otherwise TruthNotConverged is raised.
 
     Args:
         planform: The beam.
         force_n: Tip force (Fx, Fz) [N]; it keeps its direction as the beam deflects.
         rtol: Relative tolerance of the ODE integration.
+        max_load_step: Largest continuation step in :math:`\sqrt{\alpha}`.
 
     Returns:
         The equilibrium.
 
     Raises:
         InvalidBeam: If the force is not a finite 2-vector.
-        TruthNotConverged: If no root moment satisfies the free-end condition.
+        TruthNotConverged: If continuation stalls or ends off the stable physical branch.
     """
     force = np.asarray(force_n, dtype=float)
     if force.shape != (2,) or not np.all(np.isfinite(force)):
         raise InvalidBeam(f"force_n must be a finite (Fx, Fz) pair [N], got {force_n!r}")
+    if not np.isfinite(max_load_step) or max_load_step <= 0.0:
+        raise InvalidBeam(f"max_load_step = {max_load_step!r} must be positive")
     length = planform.length_m
     magnitude = float(np.hypot(*force))
     if magnitude == 0.0:
         return ElasticaSolution(force, np.array([length, 0.0]), 0.0, 0.0, length)
-
-    def tip_moment(m0: float) -> float:
-        return float(_integrate_elastica(planform, force, m0, rtol)[3])
-
-    grid = np.linspace(-magnitude * length, magnitude * length, 17)
-    values = np.array([tip_moment(m) for m in grid])
-    changes = np.flatnonzero(np.sign(values[:-1]) * np.sign(values[1:]) <= 0)
-    if changes.size == 0:
-        raise TruthNotConverged(f"no elastica equilibrium found for tip force {force} N")
-    linear = -force[1] * length
-    best = changes[np.argmin(np.abs(0.5 * (grid[changes] + grid[changes + 1]) - linear))]
-    root_moment = brentq(tip_moment, grid[best], grid[best + 1], xtol=1e-14 * magnitude * length,
-                         maxiter=200)
-    x, z, phi, _ = _integrate_elastica(planform, force, root_moment, rtol)
-    return ElasticaSolution(force, np.array([x, z]), float(phi), float(root_moment), length)
+    root_alpha = np.sqrt(magnitude * length**2 / equivalent_bending_stiffness(planform))
+    # Continuation parameter t in [0, sqrt(alpha)]; the load fraction is (t / sqrt(alpha))^2.
+    history: list[tuple[float, float]] = [(0.0, 0.0)]
+    t, step = 0.0, min(max_load_step, root_alpha)
+    result = None
+    while t < root_alpha * (1.0 - 1e-14):
+        t_new = min(root_alpha, t + step)
+        frac = (t_new / root_alpha) ** 2
+        if len(history) >= 2:
+            (t1, p1), (t2, p2) = history[-2], history[-1]
+            predicted = p2 + (p2 - p1) * (t_new - t2) / (t2 - t1)
+        else:
+            # Linear theory: phi_L = -Fz L^2 / (2 EI) for a uniform beam, a fine first guess.
+            predicted = 0.5 * frac * root_alpha**2 * (-force[1] / magnitude)
+        solved = _elastica_newton(planform, frac * force, predicted, rtol)
+        jump = np.inf if solved is None else abs(solved[0] - predicted)
+        change = abs(predicted - history[-1][1]) + 1e-9
+        if solved is None or (len(history) >= 2 and jump > 0.5 * change):
+            step *= 0.5
+            if step < 1e-6 * max(root_alpha, 1.0):
+                raise TruthNotConverged(
+                    f"elastica continuation stalled at {frac:.4g} of tip force {force} N "
+                    f"(alpha {root_alpha**2:.4g})")
+            continue
+        history.append((t_new, solved[0]))
+        result = solved
+        t = t_new
+        step = min(max_load_step, 1.5 * step)
+    assert result is not None
+    phi_tip, state, extremes = result
+    force_angle = float(np.arctan2(-force[1], force[0]))
+    low, high = min(0.0, force_angle), max(0.0, force_angle)
+    slack = 1e-8
+    if extremes[0] < low - slack or extremes[1] > high + slack or extremes[2] <= 0.0:
+        raise TruthNotConverged(
+            f"elastica for tip force {force} N ended off the stable branch: section rotations "
+            f"in [{extremes[0]:.4f}, {extremes[1]:.4f}] rad against the sector [{low:.4f}, "
+            f"{high:.4f}], smallest Jacobi field {extremes[2]:.3g}")
+    tip = -state[:2]
+    return ElasticaSolution(force, tip, float(phi_tip), float(state[3]), length)
