@@ -15,9 +15,16 @@ from pathlib import Path
 
 import numpy as np
 
-from pinflex.assignment import Target, assign_frequencies, brute_force, build_assignment, exact_cost
-from pinflex.assignment_qp import solve_assignment_qp, solve_assignment_qp_scipy
-from pinflex.config import user_trajectory
+from pinflex.assignment import (
+    Target,
+    assign_frequencies,
+    brute_force,
+    build_assignment,
+    exact_cost,
+    solve_assignment_qp,
+    solve_assignment_qp_scipy,
+)
+from pinflex.assignment.study import user_trajectory
 from pinflex.erls import FlexibleModel
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_jets.py``. For a 23-dof pencil with two rigid modes (the size of
 benchmark A) expanded in 4 variables (2 joints + 2 design variables), prints for orders 1..8
-the time of :func:`pinflex.taylor_eig.eigen_jets` for 3 elastic modes (eigensolve at the
+the time of :func:`pinflex.parametric.eigen.eigen_jets` for 3 elastic modes (eigensolve at the
 expansion point included), the time of evaluating the 3 eigenvalue polynomials at 152 samples,
 and, for comparison, the bare generalized eigensolves ``scipy.linalg.eigh(K, M)`` of 152 matrix
 pairs of the same size. The matrix jets are synthetic (random, with coefficients decaying like
@@ -16,7 +16,7 @@ import scipy.linalg
 from timing import best_of
 
 from pinflex import jets
-from pinflex.taylor_eig import eigen_jets
+from pinflex.parametric.eigen import eigen_jets
 
 N_DOF = 23
 N_RIGID = 2

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg
 from timing import best_of
 
-from pinflex.config import user_trajectory
+from pinflex.assignment.study import user_trajectory
 from pinflex.erls import FlexibleModel
 from pinflex.parametric import expand, sample
 

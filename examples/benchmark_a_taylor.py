@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 import pinflex
-from pinflex.config import user_trajectory
+from pinflex.assignment.study import user_trajectory
 
 URDF = Path(__file__).resolve().parents[1] / "urdf" / "two_link.urdf"
 

@@ -7,9 +7,15 @@ import numpy as np
 import pytest
 from conftest import TWO_LINK
 
-from pinflex.assignment import Target, assign_frequencies, build_assignment, exact_cost
-from pinflex.assignment_qp import solve_assignment_qp, solve_assignment_qp_scipy
-from pinflex.config import user_trajectory
+from pinflex.assignment import (
+    Target,
+    assign_frequencies,
+    build_assignment,
+    exact_cost,
+    solve_assignment_qp,
+    solve_assignment_qp_scipy,
+)
+from pinflex.assignment.study import user_trajectory
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import AssignmentInfeasible, AssignmentWarning, TrajectoryWarning
 from pinflex.trajectory import Trajectory

@@ -1,11 +1,11 @@
-"""Tests of pinflex.assignment_qp: the assignment QP (paper 000, eq. 10–14) and its solvers."""
+"""Tests of pinflex.assignment: the assignment QP (paper 000, eq. 10–14) and its solvers."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from pinflex.assignment_qp import (
+from pinflex.assignment import (
     AssignmentQP,
     build_assignment_qp,
     solve_assignment_qp,

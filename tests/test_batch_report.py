@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from pinflex.batch.cli import main
 from pinflex.batch.report import build_report, write_histograms
 from pinflex.batch.store import ResultStore
 from pinflex.batch.tasks import PrbdmStudy, config_hash
+from pinflex.cli import main
 from pinflex.exceptions import StoreError
 
 
@@ -65,11 +65,11 @@ def test_histograms_are_png_files(store, tmp_path):
 def test_report_command_prints_percent_and_failures(store, capsys):
     """The command prints the median in percent and each failure type."""
     path, errors = store
-    assert main(["report", str(path), "--no-plots"]) == 0
+    assert main(["batch", "report", str(path), "--no-plots"]) == 0
     out = capsys.readouterr().out
     assert f"{100 * np.median(errors):.3g}" in out
     assert "failed 2x truth: TruthNotConverged" in out
-    assert main(["report", str(path), "--json", "--no-plots"]) == 0
+    assert main(["batch", "report", str(path), "--json", "--no-plots"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["groups"][0]["n_failed"] == 3
 

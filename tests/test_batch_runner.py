@@ -33,7 +33,7 @@ VOLATILE = ("timings", "worker", "finished_at")
 
 
 def _cli(*args: str) -> list[str]:
-    return [sys.executable, "-m", "pinflex.batch.cli", *args]
+    return [sys.executable, "-m", "pinflex", "batch", *args]
 
 
 def _content(path: Path) -> dict:
@@ -272,14 +272,15 @@ def test_progress_bar_reports_rate_and_eta():
 
 def test_bad_command_lines_fail_before_any_cluster_starts(tmp_path, capsys):
     """Inconsistent options exit with code 2 and a message naming the fix."""
-    from pinflex.batch.cli import main
     from pinflex.batch.runner import connect
+    from pinflex.cli import main
     from pinflex.exceptions import BatchError
 
     store = str(tmp_path / "s.db")
-    assert main(["prbdm", "--beams", "2", "--links", "4", "--modes", "5", "--store", store]) == 2
+    assert main(["batch", "prbdm", "--beams", "2", "--links", "4", "--modes", "5",
+                 "--store", store]) == 2
     assert "the 4R model has 4 modes" in capsys.readouterr().err
-    assert main(["assign", str(STUDY_A), "--sweep", "nope=1", "--store", store]) == 2
+    assert main(["batch", "assign", str(STUDY_A), "--sweep", "nope=1", "--store", store]) == 2
     assert "not sweepable" in capsys.readouterr().err
     with pytest.raises(BatchError, match="--workers sizes the local cluster"):
         connect("tcp://127.0.0.1:9", workers=2)

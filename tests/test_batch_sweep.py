@@ -54,7 +54,7 @@ def test_bad_sweeps_name_the_fix(option, message):
 
 def test_overrides_change_a_copy_of_the_study():
     """Overrides reach the right fields and leave the loaded study untouched."""
-    from pinflex.config import load_config
+    from pinflex.assignment.study import load_config
 
     base = load_config(STUDY)
     cfg = apply_overrides(base, {"targets.0.freq_hz": 185, "constraints.mass_budget_kg": 0.2,

@@ -124,7 +124,7 @@ def test_trajectory_playback_runs_by_itself(browser, two_link_planar, tmp_path):
 
     Without a ``#t=`` fragment the animation advances on its own with the browser's clock.
     """
-    from pinflex.config import user_trajectory
+    from pinflex.assignment.study import user_trajectory
     from pinflex.visualization import trajectory_preview
 
     traj = user_trajectory(two_link_planar, "benchmark_a")

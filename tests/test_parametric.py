@@ -191,7 +191,7 @@ def test_frequency_polynomial_is_the_square_root_of_the_eigenvalue_one():
 
 def test_expansion_along_a_trajectory_meets_the_tolerance_with_the_fewest_points():
     """Covering benchmark A's path to 1e-4: every sample within tol, fewest points chosen."""
-    from pinflex.config import user_trajectory
+    from pinflex.assignment.study import user_trajectory
     from pinflex.parametric import expand_along
 
     model = FlexibleModel(TWO_LINK, planar=True)
@@ -209,7 +209,7 @@ def test_expansion_along_a_trajectory_meets_the_tolerance_with_the_fewest_points
 
 def test_sampled_model_equals_the_full_polynomial_for_any_design():
     """Fixing the joint samples changes nothing: values equal evaluate() at any design."""
-    from pinflex.config import user_trajectory
+    from pinflex.assignment.study import user_trajectory
     from pinflex.parametric import sample
 
     model = FlexibleModel(TWO_LINK, planar=True)

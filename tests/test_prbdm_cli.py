@@ -1,11 +1,12 @@
-"""Tests of pinflex.prbdm.cli: the ``prbdm`` subcommand."""
+"""Tests of pinflex.cli.prbdm: the ``prbdm`` subcommand."""
 
 import argparse
 import json
 
 import pytest
 
-from pinflex.prbdm import cli
+from pinflex.cli import main
+from pinflex.cli import prbdm as cli
 
 
 def test_add_parser_registers_prbdm_subcommand():
@@ -22,7 +23,7 @@ def test_add_parser_registers_prbdm_subcommand():
 
 def test_prbdm_json_output_reports_errors(capsys):
     """`pinflex prbdm --json` prints one JSON object whose 2R eigen fit matches both modes."""
-    status = cli.main(["prbdm", "--beam", "uniform", "--links", "2", "--objective", "eigen",
+    status = main(["prbdm", "--beam", "uniform", "--links", "2", "--objective", "eigen",
                        "--starts", "1", "--json", "--no-progress"])
     assert status == 0
     data = json.loads(capsys.readouterr().out)
@@ -33,17 +34,15 @@ def test_prbdm_json_output_reports_errors(capsys):
 
 
 def test_prbdm_reports_bad_input_with_exit_status(capsys):
-    """More modes than joints exits with status 1 and a message on stderr."""
-    status = cli.main(["prbdm", "--links", "2", "--modes", "3", "--json", "--no-progress"])
-    assert status == 1
+    """More modes than joints is a user error: status 2 and one line on stderr."""
+    status = main(["prbdm", "--links", "2", "--modes", "3", "--json", "--no-progress"])
+    assert status == 2
     assert "modes" in capsys.readouterr().err
 
 
 def test_prbdm_html_writes_an_offline_preview(tmp_path, capsys):
     """`pinflex prbdm --html FILE` writes one self-contained page and names it in the JSON."""
     import json
-
-    from pinflex.cli import main
 
     page = tmp_path / "chain.html"
     code = main(["prbdm", "--beam", "random", "--seed", "2", "--links", "2", "--modes", "2",

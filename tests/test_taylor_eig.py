@@ -1,4 +1,4 @@
-"""Tests of pinflex.taylor_eig: Taylor recursion of eigenvalues and eigenvectors."""
+"""Tests of pinflex.parametric.eigen: Taylor recursion of eigenvalues and eigenvectors."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import scipy.linalg as sla
 
 from pinflex import jets as J
 from pinflex.exceptions import EigenSolverError, RepeatedEigenvalue
-from pinflex.taylor_eig import eigen_jets, find_cluster, radius_estimate
+from pinflex.parametric.eigen import eigen_jets, find_cluster, radius_estimate
 
 
 def _spd(rng, n, shift):

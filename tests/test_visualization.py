@@ -203,7 +203,7 @@ def test_static_html_is_self_contained(two_link_planar, tmp_path):
 
 def test_trajectory_playback_colours_and_labels(two_link_planar):
     """Benchmark A playback: one keyframe per sample, colours ordered by frequency, labels."""
-    from pinflex.config import user_trajectory
+    from pinflex.assignment.study import user_trajectory
 
     traj = user_trajectory(two_link_planar, "benchmark_a")
     p = trajectory_preview(two_link_planar, traj.times_s, traj.q)
@@ -226,7 +226,7 @@ def test_trajectory_playback_colours_and_labels(two_link_planar):
 def test_assignment_preview_shows_the_assigned_design(two_link_planar, tmp_path):
     """Benchmark A assignment: the page plays the assigned design, labels quote the target."""
     from pinflex.assignment import Target, assign_frequencies
-    from pinflex.config import user_trajectory
+    from pinflex.assignment.study import user_trajectory
     from pinflex.visualization import assignment_preview_html
 
     traj = user_trajectory(two_link_planar, "benchmark_a")

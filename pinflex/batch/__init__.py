@@ -5,7 +5,7 @@
 * :mod:`pinflex.batch.runner`: the Dask client loop (local cluster or existing scheduler);
 * :mod:`pinflex.batch.store`: the result store, one row per (seed, item, config hash);
 * :mod:`pinflex.batch.report`: error distributions, failures and histograms;
-* :mod:`pinflex.batch.cli`: the ``pinflex batch`` command.
+* the ``pinflex batch`` command is :mod:`pinflex.cli.batch`.
 
 Dask is imported only when a batch runs.
 """

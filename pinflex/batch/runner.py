@@ -375,7 +375,7 @@ def run_assign(config_path: str | Path, sweeps: list[tuple[str, list]],
     """Run (or resume) a sweep of assignment studies.
 
     Args:
-        config_path: TOML study file (:mod:`pinflex.config`).
+        config_path: TOML study file (:mod:`pinflex.assignment.study`).
         sweeps: Parsed ``--sweep`` options (:func:`~pinflex.batch.sweep.parse_sweeps`).
         store_path: SQLite store file.
         scheduler: Address of an existing Dask scheduler; default a local cluster.
@@ -403,4 +403,5 @@ def run_assign(config_path: str | Path, sweeps: list[tuple[str, list]],
                               args=(cfg, overrides, chash, index), kind=KIND,
                               params={"case": index, "overrides": overrides}))
         return run_tasks(store, tasks, len(cases), skipped, scheduler, workers, retry_failed,
-                         progress, label="cases", preload=("pinflex.config", "pinflex.assignment"))
+                         progress, label="cases",
+                         preload=("pinflex.assignment.study", "pinflex.assignment"))

@@ -1,7 +1,7 @@
 """Sweeps of assignment studies: ``--sweep KEY=V1,V2,...`` over a TOML study.
 
-A sweep option names a key of the study file (:mod:`pinflex.config`) by its dotted TOML path,
-with list entries by index, and the values it takes::
+A sweep option names a key of the study file (:mod:`pinflex.assignment.study`) by its dotted
+TOML path, with list entries by index, and the values it takes::
 
     --sweep targets.0.freq_hz=185,190,195         # the first [[targets]] entry
     --sweep constraints.mass_budget_kg=0.1,0.2
@@ -131,12 +131,12 @@ def _index(items: list, index: str, key: str) -> int:
 
 
 def apply_overrides(cfg, overrides: dict):
-    """A copy of an :class:`~pinflex.config.AssignmentConfig` with sweep values applied.
+    """A copy of an :class:`~pinflex.assignment.study.AssignmentConfig` with sweep values applied.
 
     Raises:
         InvalidSweep: For an index out of range or a value of the wrong type.
     """
-    from pinflex.config import resolve
+    from pinflex.assignment.study import resolve
 
     cfg = copy.deepcopy(cfg)
     for key, value in overrides.items():
@@ -195,7 +195,7 @@ def _file_digest(path: Path | None) -> str | None:
 
 def case_config(config_path: Path, cfg, overrides: dict) -> dict:
     """The configuration a case's hash covers: file digests and overrides."""
-    from pinflex.config import resolve
+    from pinflex.assignment.study import resolve
 
     csv = cfg.trajectory.get("csv")
     return {
@@ -219,7 +219,7 @@ def plan_cases(config_path: str | Path, sweeps: list[tuple[str, list]]):
         ConfigurationError: If the study file is invalid.
         InvalidSweep: If a sweep does not apply to it.
     """
-    from pinflex.config import load_config
+    from pinflex.assignment.study import load_config
 
     base = load_config(config_path)
     out = []
@@ -238,7 +238,7 @@ def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
     Returns:
         A one-element list with the row; failures are recorded, never raised.
     """
-    from pinflex.config import run_config
+    from pinflex.assignment.study import run_config
 
     t0, c0 = time.perf_counter(), time.process_time()
     row = {"seed": 0, "item": 0, "config_hash": chash, "kind": KIND, "status": "failed",

@@ -30,11 +30,9 @@ import numpy as np
 
 from pinflex.batch.store import canonical_json
 from pinflex.exceptions import BatchError
+from pinflex.prbdm.options import DEFAULT_ALPHAS, OBJECTIVES
 
 KIND = "prbdm"
-#: Load levels alpha = P L^2 / EI_eq of the deflection truth (``pinflex.prbdm.problem``).
-DEFAULT_ALPHAS = (0.5, 1.0, 2.0, 5.0)
-OBJECTIVES = ("eigen", "deflection", "combined", "pareto")
 
 
 def config_hash(config: dict) -> str:

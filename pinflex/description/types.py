@@ -9,7 +9,7 @@ import numpy as np
 
 from pinflex import beam
 from pinflex.exceptions import JointNotFound, LinkNotFound
-from pinflex.kinematics import skew as _skew
+from pinflex.linalg import skew as _skew
 
 NAMESPACE = "urn:pinflex:urdf:1"
 _NS = "{" + NAMESPACE + "}"

@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from pinflex.erls.terms import BatchAlgebra
 from pinflex.exceptions import ConfigurationError, EigenSolverError
-from pinflex.kinematics import rotate_twist
+from pinflex.linalg import rotate_twist
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,6 @@ from pinflex.erls.terms import (
     _Attachment,
     _offset_block,
     _PoseTerms,
-    _rot6,
     _zeros_like,
 )
 from pinflex.exceptions import (
@@ -50,7 +49,7 @@ from pinflex.exceptions import (
     DesignVariableOutOfBounds,
     InvalidDescription,
 )
-from pinflex.kinematics import axis_rotation, translate_twist
+from pinflex.linalg import axis_rotation, rotate_twist, translate_twist
 
 
 def add_design_masses(M0: np.ndarray, Md: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -405,7 +404,7 @@ class FlexibleModel:
                 R = terms.rot[j.name]
             else:
                 R = alg.const(j.R_o)
-            twist[j.child] = j.proj @ alg.mm(_rot6(np.swapaxes(R, -1, -2)), tau)
+            twist[j.child] = j.proj @ alg.mm(rotate_twist(np.swapaxes(R, -1, -2)), tau)
         return twist
 
     @staticmethod

@@ -9,7 +9,7 @@ from pinflex import beam
 from pinflex.description import FlexibleLink
 from pinflex.erls.terms import PLANAR_NODE_DOFS, _Attachment, _ChildJoint, _FlexPlan
 from pinflex.exceptions import ConfigurationError, PlanarModelError
-from pinflex.kinematics import rotate_twist, translate_twist
+from pinflex.linalg import rotate_twist, translate_twist
 
 
 def coordinate_map(model, absolute: bool) -> np.ndarray:

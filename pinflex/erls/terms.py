@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pinflex.description import FlexibleLink
-from pinflex.kinematics import skew
+from pinflex.linalg import skew
 
 PLANAR_NODE_DOFS = (0, 1, 5)  # ux, uy, θz in beam axes (beam z = plane normal)
 
@@ -89,13 +89,6 @@ class BatchAlgebra:
         """Product of two pose-dependent matrices."""
         return a @ b
 
-
-
-def _rot6(R: np.ndarray) -> np.ndarray:
-    out = np.zeros(R.shape[:-2] + (6, 6))
-    out[..., :3, :3] = R
-    out[..., 3:, 3:] = R
-    return out
 
 
 def _offset_block(p: np.ndarray) -> np.ndarray:

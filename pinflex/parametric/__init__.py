@@ -6,7 +6,7 @@ truncated Taylor arithmetic (:mod:`pinflex.jets`) instead of on numbers: the joi
 kinematics are propagated down the URDF tree as jets (a revolute joint's rotation is the
 exact series of ``I + sin θ [a]× + (1 − cos θ) [a]×²``, a prismatic joint's offset is linear),
 so every coefficient is exact to round-off. Design variables (point masses) enter ``M``
-linearly. The eigenvalue jets follow from the recursion of :mod:`pinflex.taylor_eig`.
+linearly. The eigenvalue jets follow from the recursion of :mod:`pinflex.parametric.eigen`.
 
 What is expanded: the eigenvalue ``λ = ω²`` [rad²/s²] of paper 000 eq. (2). The frequency
 polynomial ``f = √λ / 2π`` [Hz] is derived from it by exact jet arithmetic

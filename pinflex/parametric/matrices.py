@@ -10,7 +10,7 @@ from pinflex import jets
 from pinflex.erls import BatchAlgebra, FlexibleModel, _PoseTerms
 from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
 from pinflex.jets import JetSpace
-from pinflex.kinematics import axis_rotation, skew
+from pinflex.linalg import axis_rotation, skew
 
 
 class JetAlgebra:

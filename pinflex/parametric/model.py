@@ -12,8 +12,8 @@ from pinflex import jets
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError, TaylorRadiusWarning
 from pinflex.jets import JetSpace
+from pinflex.parametric.eigen import eigen_jets
 from pinflex.parametric.matrices import matrix_jets
-from pinflex.taylor_eig import eigen_jets
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from functools import cached_property
 
 import numpy as np
 
-from pinflex._arrays import readonly as _readonly
+from pinflex.linalg import readonly as _readonly
 
 from ..exceptions import InvalidBeam
 

@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 import scipy.linalg as sla
 
-from pinflex._arrays import readonly as _readonly
+from pinflex.linalg import readonly as _readonly
 
 from ..exceptions import ConfigurationError, InvalidChain, NewtonDivergence
 from .beams import Planform, chain_segments

@@ -31,6 +31,7 @@ from scipy.optimize import least_squares
 from ..exceptions import InvalidChain, MappingFailed
 from .beams import Planform
 from .chain import PrbdmChain, build_chain
+from .options import OBJECTIVES
 from .problem import (
     MIN_FRACTION,
     Evaluation,
@@ -41,8 +42,6 @@ from .problem import (
     evaluate,
     static_stiffness,
 )
-
-OBJECTIVES = ("eigen", "deflection", "combined", "pareto")
 
 
 @dataclass(frozen=True)

@@ -38,10 +38,9 @@ import pinocchio as pin
 from ..exceptions import InvalidChain, NewtonDivergence
 from .beams import Planform, chain_segments, equivalent_bending_stiffness
 from .chain import PrbdmChain, build_chain, chain_frequencies, solve_tip_statics
+from .options import DEFAULT_ALPHAS, STIFFNESS_LAWS
 from .truth import BeamModes, beam_frequencies, elastica_tip
 
-STIFFNESS_LAWS = ("segment", "paper")
-DEFAULT_ALPHAS = (0.5, 1.0, 2.0, 5.0)
 MIN_FRACTION = 0.02
 #: Loss assigned to a load whose Newton solve fails (100 % error), so optimisers move away.
 FAILED_LOAD_ERROR = 1.0

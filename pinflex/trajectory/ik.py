@@ -7,11 +7,11 @@ from typing import Sequence
 
 import numpy as np
 
-from pinflex._arrays import readonly as _readonly
 from pinflex.exceptions import (
     IKNotConverged,
     InvalidPath,
 )
+from pinflex.linalg import readonly as _readonly
 
 
 @dataclass(frozen=True)

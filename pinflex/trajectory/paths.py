@@ -7,10 +7,10 @@ from typing import Literal, Sequence
 
 import numpy as np
 
-from pinflex._arrays import readonly as _readonly
 from pinflex.exceptions import (
     InvalidPath,
 )
+from pinflex.linalg import readonly as _readonly
 
 
 @dataclass(frozen=True)

@@ -10,12 +10,12 @@ from typing import Literal
 
 import numpy as np
 
-from pinflex._arrays import readonly as _readonly
 from pinflex.exceptions import (
     InvalidTrajectory,
     JointLimitsExceeded,
     TrajectoryWarning,
 )
+from pinflex.linalg import readonly as _readonly
 
 
 def trapezoid_weights(times_s: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""``pinflex assign`` and ``pinflex demo`` (benchmark A end to end)."""
+"""``pinflex demo``: benchmark A (paper 000) end to end: modes, Taylor model, assignment."""
 
 from __future__ import annotations
 
@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from pinflex.cli.assign import summary, write_preview
+
 PAPER = {
     "taylor_traj_full": 0.09, "taylor_traj_lin": 1.64,
     "taylor_y_full": 0.05, "taylor_y_lin": 1.34,
@@ -19,14 +21,7 @@ PAPER = {
 
 
 def add_parser(sub) -> None:
-    """Register the ``assign`` and ``demo`` subcommands."""
-    p = sub.add_parser("assign", help="assign eigenfrequencies along a trajectory (TOML study)")
-    p.add_argument("config", help="TOML study file (see pinflex.config)")
-    p.add_argument("--out", default=None, help="folder for the charts (default: none)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--html", default=None, metavar="FILE", help="write an HTML preview")
-    p.set_defaults(func=cmd_assign)
-
+    """Register the ``demo`` subcommand on an ``argparse`` subparsers object."""
     d = sub.add_parser("demo", help="benchmark A end to end: modes, Taylor model, assignment")
     d.add_argument("--out", default="pinflex-demo", help="output folder (default: pinflex-demo)")
     d.add_argument("--json", action="store_true", help="print one JSON object")
@@ -37,65 +32,11 @@ def add_parser(sub) -> None:
     d.set_defaults(func=cmd_demo)
 
 
-def _summary(result, total_s: float) -> dict:
-    return {
-        "design": result.design,
-        "max_error_before": result.max_error_before,
-        "max_error_after": result.max_error_after,
-        "predicted_max_error_after": result.predicted_max_error_after,
-        "qp_iterations": int(result.solution.iterations),
-        "qp_time_s": float(result.solution.time_s),
-        "refinements": result.refinements,
-        "timings_s": result.timings_s,
-        "total_time_s": total_s,
-    }
-
-
-def _write_preview(model, traj, result, path) -> str | None:
-    try:
-        from pinflex.visualization import assignment_preview_html
-    except ImportError:
-        return None
-    return str(assignment_preview_html(model, traj, result, path))
-
-
-def cmd_assign(args: argparse.Namespace) -> int:
-    """Run ``pinflex assign``."""
-    from pinflex.charts import assignment_charts
-    from pinflex.config import load_config, run_config
-
-    t0 = time.perf_counter()
-    cfg = load_config(args.config)
-    model, traj, result = run_config(cfg)
-    total = time.perf_counter() - t0
-    charts = []
-    if args.out:
-        charts = [str(p) for p in assignment_charts(result, traj.times_s, args.out)]
-    html = _write_preview(model, traj, result, args.html) if args.html else None
-    out = _summary(result, total)
-    out["charts"] = charts
-    out["html"] = html
-    if args.json:
-        print(json.dumps(out))
-        return 0
-    print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
-    print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
-          f"{100 * result.max_error_after:.2f} % "
-          f"(predicted {100 * result.predicted_max_error_after:.2f} %)")
-    print(f"QP: {result.solution.iterations} iterations, {1e3 * result.solution.time_s:.3f} ms; "
-          f"total {total:.3f} s")
-    for c in charts:
-        print(f"wrote {c}")
-    if html:
-        print(f"wrote {html}")
-    return 0
-
-
 def cmd_demo(args: argparse.Namespace) -> int:
     """Run ``pinflex demo``: benchmark A end to end, beside paper 000's figures."""
     from pinflex.assignment import Target, assign_frequencies, brute_force, exact_cost
-    from pinflex.charts import assignment_charts
-    from pinflex.config import builtin_path, user_trajectory
+    from pinflex.assignment.charts import assignment_charts
+    from pinflex.assignment.study import builtin_path, user_trajectory
     from pinflex.erls import FlexibleModel
     from pinflex.parametric import expand
 
@@ -166,7 +107,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
             f"best max error {100 * brute.best_max_error:.2f} % at "
             f"{brute.y_best_max_error.round(4).tolist()}")
     charts = assignment_charts(result, traj.times_s, out_dir)
-    html = _write_preview(model, traj, result, args.html or out_dir / "preview.html")
+    html = write_preview(model, traj, result, args.html or out_dir / "preview.html")
     t = result.timings_s
     say(f"\n  compute: expansion {1e3 * t_expand:.1f} ms; assignment end to end "
         f"{1e3 * t['total']:.1f} ms (expansion+build {1e3 * t['expansion_and_build']:.1f}, QP "
@@ -178,7 +119,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     total = time.perf_counter() - t_all
     say(f"  demo finished in {total:.1f} s; outputs in {out_dir}/")
     if args.json:
-        out = _summary(result, total)
+        out = summary(result, total)
         out.update({"taylor_errors_percent": errs, "paper": PAPER, "ndof": model.ndof,
                     "charts": [str(c) for c in charts], "html": html, "out": str(out_dir)})
         if brute is not None:

@@ -3,7 +3,7 @@
 :func:`build_assignment` expands the chosen modes at ``(q0, y0)`` (:mod:`pinflex.parametric`),
 samples the partially linear polynomials ``l_{i,0}(q(t))``, ``l_{i,j}(q(t))`` on the
 trajectory and returns the QP (12)–(14) with the trapezoidal rule on the trajectory grid
-(:mod:`pinflex.assignment_qp`). :func:`assign_frequencies` solves it with ProxQP, then checks
+(:mod:`pinflex.assignment.problem`). :func:`assign_frequencies` solves it with ProxQP, then checks
 every answer with the exact ERLS model along the whole trajectory; errors reported before and
 after always come from the exact model.
 
@@ -23,14 +23,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pinflex.assignment_qp import (
-    AssignmentQP,
-    QPSolution,
-    build_assignment_qp,
-    solve_assignment_qp,
-)
+from pinflex.assignment.problem import AssignmentQP, QPSolution, build_assignment_qp
+from pinflex.assignment.solve import solve_assignment_qp
 from pinflex.erls import FlexibleModel
-from pinflex.erls.model import add_design_masses
 from pinflex.exceptions import AssignmentWarning, ConfigurationError
 from pinflex.parametric import TaylorModel, expand
 from pinflex.trajectory import Trajectory
@@ -92,7 +87,8 @@ class AssignmentResult:
     timings_s: dict[str, float] = field(default_factory=dict)
 
 
-def _target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
+def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
+    """Target frequencies (n_targets, ns) [Hz] of ``targets`` on ``ns`` samples (checked)."""
     out = np.empty((len(targets), ns))
     for i, t in enumerate(targets):
         f = np.broadcast_to(np.asarray(t.freq_hz, dtype=float), (ns,))
@@ -146,7 +142,7 @@ def build_assignment(
         b_ineq: Right-hand side of ``A_ineq``.
         floors: ``(mode, f_min_hz)``: the mode's predicted frequency stays above f_min.
         bands: ``(mode, a_hz, b_hz)``: forbidden band of a mode (see
-            :func:`pinflex.assignment_qp.build_assignment_qp`).
+            :func:`pinflex.assignment.problem.build_assignment_qp`).
         taylor: Reuse this Taylor model instead of expanding.
 
     Returns:
@@ -176,7 +172,7 @@ def build_assignment(
     pos = [taylor.modes.index(m) for m in modes]
     l0, L = taylor.linear_parts(Q, quantity=quantity)
     l0, L = l0[:, pos].T, np.transpose(L[:, pos, :], (1, 0, 2))
-    tgt = _target_matrix(targets, ns)
+    tgt = target_matrix(targets, ns)
     full_targets = np.zeros((len(modes), ns))
     weights = np.zeros(len(modes))
     for t, row in zip(targets, tgt):
@@ -224,7 +220,7 @@ def exact_errors(model: FlexibleModel, Q: np.ndarray, y: np.ndarray,
                  targets: Sequence[Target], modes: Sequence[int]):
     """Exact frequencies (ns, len(modes)) [Hz] and the largest relative target error."""
     f = model.frequencies(Q, y, n_modes=max(modes))[:, [m - 1 for m in modes]]
-    tgt = _target_matrix(targets, Q.shape[0])
+    tgt = target_matrix(targets, Q.shape[0])
     cols = [list(modes).index(t.mode) for t in targets]
     err = np.abs(f[:, cols].T / tgt - 1.0)
     return f, float(err.max())
@@ -314,7 +310,7 @@ def assign_frequencies(
         y=y,
         y_before=y_before,
         modes=tuple(modes),
-        targets_hz=_target_matrix(targets, Q.shape[0]),
+        targets_hz=target_matrix(targets, Q.shape[0]),
         freq_before_hz=f_before,
         freq_after_hz=f_after,
         max_error_before=err_before,
@@ -340,7 +336,7 @@ def _predicted_error(problem, taylor, trajectory, targets, solution, kwargs) -> 
     quantity = kwargs.get("quantity", "freq_hz")
     Q = trajectory.q
     l0, L = taylor.linear_parts(Q, quantity=quantity)
-    tgt = _target_matrix(targets, Q.shape[0])
+    tgt = target_matrix(targets, Q.shape[0])
     worst = 0.0
     for t, row in zip(targets, tgt):
         k = taylor.modes.index(t.mode)
@@ -348,97 +344,3 @@ def _predicted_error(problem, taylor, trajectory, targets, solution, kwargs) -> 
         f = pred if quantity == "freq_hz" else np.sqrt(np.maximum(pred, 0)) / (2 * np.pi)
         worst = max(worst, float(np.max(np.abs(f / row - 1))))
     return worst
-
-
-@dataclass(frozen=True)
-class BruteForceResult:
-    """Best designs on a grid, judged with the exact model.
-
-    Attributes:
-        y_best_cost: Design minimising the exact cost (the QP's cost, exact frequencies) [kg].
-        best_cost: Its exact cost.
-        y_best_max_error: Design minimising the largest relative target error [kg].
-        best_max_error: That error (fraction).
-        evaluations: Number of designs evaluated.
-        spacing: Final grid spacing per variable [kg].
-    """
-
-    y_best_cost: np.ndarray
-    best_cost: float
-    y_best_max_error: np.ndarray
-    best_max_error: float
-    evaluations: int
-    spacing: np.ndarray
-
-
-def exact_cost(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[Target],
-               Y: np.ndarray, quantity: str = "freq_hz"):
-    """Exact cost (10) and largest relative target error for designs Y (n, ny).
-
-    ``M`` is affine in the point masses, so the matrices are assembled once per pose and only
-    the eigenproblems are solved per design.
-    """
-    Q = model.check_q(trajectory.q)
-    ns = Q.shape[0]
-    w = trajectory.trapezoid_weights()
-    M0, Md, K = model.assemble(model.pose_terms(Q), _batch(ns))
-    tgt = _target_matrix(targets, ns)
-    nmax = max(t.mode for t in targets)
-    costs, errs = np.empty(len(Y)), np.empty(len(Y))
-    for i, y in enumerate(np.atleast_2d(Y)):
-        M = add_design_masses(M0, Md, y)
-        lam = model.eigvals_from(M, K)[:, :nmax]
-        f = np.sqrt(lam) / (2 * np.pi)
-        cost, err = 0.0, 0.0
-        for t, row in zip(targets, tgt):
-            fi = f[:, t.mode - 1]
-            if quantity == "eigval":
-                d = (2 * np.pi * fi) ** 2 - (2 * np.pi * row) ** 2
-            else:
-                d = fi - row
-            cost += 0.5 * t.weight * float(np.sum(w * d**2))
-            err = max(err, float(np.max(np.abs(fi / row - 1))))
-        costs[i], errs[i] = cost, err
-    return costs, errs
-
-
-def _batch(n):
-    from pinflex.erls import BatchAlgebra
-
-    return BatchAlgebra(n)
-
-
-def brute_force(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[Target], *,
-                points: int = 26, zoom_levels: int = 2, quantity: str = "freq_hz"
-                ) -> BruteForceResult:
-    """Search the design box on a grid with the exact model, then zoom around the best.
-
-    Each zoom level re-grids ``points`` per variable over ±2 spacings around the current best
-    (clipped to the bounds), so the final spacing is ``range / (points − 1) · (4 / (points −
-    1))^zoom_levels``.
-    """
-    lo = np.array([d.lower for d in model.design])
-    hi = np.array([d.upper for d in model.design])
-    if not np.all(np.isfinite(hi)):
-        raise ConfigurationError("brute force needs finite upper bounds on every design variable")
-    if model.ny > 3:
-        raise ConfigurationError("brute force is limited to three design variables")
-    best = {}
-    total = 0
-    a, b = lo.copy(), hi.copy()
-    spacing = (b - a) / (points - 1)
-    for level in range(zoom_levels + 1):
-        axes = [np.linspace(a[j], b[j], points) for j in range(model.ny)]
-        Y = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, model.ny)
-        costs, errs = exact_cost(model, trajectory, targets, Y, quantity)
-        total += len(Y)
-        for key, vals in (("cost", costs), ("err", errs)):
-            i = int(np.argmin(vals))
-            if key not in best or vals[i] < best[key][1]:
-                best[key] = (Y[i].copy(), float(vals[i]))
-        spacing = (b - a) / (points - 1)
-        centre = best["cost"][0]
-        a = np.maximum(lo, centre - 2 * spacing)
-        b = np.minimum(hi, centre + 2 * spacing)
-    return BruteForceResult(best["cost"][0], best["cost"][1], best["err"][0], best["err"][1],
-                            total, spacing)

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from pinflex.cli import parse_values
+from pinflex.cli.common import add_robot_arguments, parse_values
 
 
 def add_parser(sub) -> None:
@@ -20,15 +20,9 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "view", help="animate a mode shape in meshcat (served locally or as static HTML)"
     )
-    p.add_argument("urdf", help="annotated URDF (or pinflex overlay) file")
-    p.add_argument("--q", type=float, nargs="+", metavar="V",
-                   help="joint values, one per moving joint, in the file's convention "
-                   "(default: zeros)")
+    add_robot_arguments(p)
     p.add_argument("--mode", type=int, default=1, metavar="K",
                    help="mode to animate, 1 = lowest non-rigid mode (default: 1)")
-    p.add_argument("--planar", action="store_true", help="keep in-plane elastic dofs only")
-    p.add_argument("--set", action="append", metavar="NAME=VALUE",
-                   help="set a point mass [kg] (repeatable)")
     p.add_argument("--amplitude", type=float, default=None, metavar="A",
                    help="peak displacement drawn [m] (default: 8 %% of the robot's size)")
     p.add_argument("--html", default=None, metavar="FILE",
@@ -36,7 +30,6 @@ def add_parser(sub) -> None:
     p.add_argument("--serve-seconds", type=float, default=None, metavar="S",
                    help="stop serving after S seconds (default: until Ctrl-C)")
     p.set_defaults(func=cmd_view)
-
 
 
 def cmd_view(args: argparse.Namespace) -> int:

@@ -1,4 +1,7 @@
-"""Small rigid-body helpers shared by the ERLS assembly (batched over a leading axis)."""
+"""Small array helpers: read-only copies, and the rigid-body algebra of the ERLS layers.
+
+The rigid-body helpers are batched over leading axes.
+"""
 
 from __future__ import annotations
 
@@ -41,3 +44,10 @@ def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     k2 = k @ k
     s, c = np.sin(angle), np.cos(angle)
     return np.eye(3) + s[..., None, None] * k + (1.0 - c)[..., None, None] * k2
+
+
+def readonly(values) -> np.ndarray:
+    """A read-only float copy of ``values`` (fields of frozen dataclasses)."""
+    array = np.array(values, dtype=float)
+    array.setflags(write=False)
+    return array

@@ -1,19 +1,18 @@
 """``pinflex prbdm``: fit a pseudo-rigid-body dynamic model to a beam and report it.
 
-The main CLI calls :func:`add_parser` with its subparsers object; :func:`run` executes the
-parsed arguments and returns the exit status. With ``--json`` one JSON object goes to stdout
-(progress bars go to stderr).
+Registered on the main parser by :func:`add_parser`; :func:`run` executes the parsed
+arguments and returns the exit status (errors are reported by :func:`pinflex.cli.main`). With
+``--json`` one JSON object goes to stdout (progress bars go to stderr).
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 
-from ..exceptions import PinflexError
-from .beams import random_beam, uniform_beam
-from .mapping import OBJECTIVES, fit_prbdm
-from .problem import STIFFNESS_LAWS, compute_truth
+from pinflex.prbdm.beams import random_beam, uniform_beam
+from pinflex.prbdm.mapping import fit_prbdm
+from pinflex.prbdm.options import OBJECTIVES, STIFFNESS_LAWS
+from pinflex.prbdm.problem import compute_truth
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -38,7 +37,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--links", type=int, default=5, help="number of revolute joints n")
     parser.add_argument("--modes", type=int, default=None,
                         help="bending modes to match (default: n)")
-    parser.add_argument("--objective", choices=("eigen", "deflection", "pareto", "combined"),
+    parser.add_argument("--objective", choices=OBJECTIVES,
                         default="eigen", help="what the mapping minimises")
     parser.add_argument("--stiffness-law", choices=STIFFNESS_LAWS, default="segment",
                         help="'segment' (pose-independent physical springs, default) or "
@@ -56,21 +55,14 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``pinflex prbdm``; return the process exit status."""
-    if args.objective not in OBJECTIVES:
-        print(f"error: unknown objective {args.objective!r}", file=sys.stderr)
-        return 2
-    try:
-        beam = (uniform_beam() if args.beam == "uniform"
-                else random_beam(args.seed, n_sections=args.sections))
-        n_modes = args.modes if args.modes is not None else args.links
-        truth = compute_truth(beam, max(n_modes, 1))
-        fit = fit_prbdm(beam, args.links, n_modes, objective=args.objective,
-                        stiffness_law=args.stiffness_law, poses=args.poses,
-                        n_starts=args.starts, seed=args.seed, truth=truth,
-                        progress=not args.no_progress)
-    except PinflexError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 1
+    beam = (uniform_beam() if args.beam == "uniform"
+            else random_beam(args.seed, n_sections=args.sections))
+    n_modes = args.modes if args.modes is not None else args.links
+    truth = compute_truth(beam, max(n_modes, 1))
+    fit = fit_prbdm(beam, args.links, n_modes, objective=args.objective,
+                    stiffness_law=args.stiffness_law, poses=args.poses,
+                    n_starts=args.starts, seed=args.seed, truth=truth,
+                    progress=not args.no_progress)
     html = None
     if args.html:
         from pinflex.visualization import prbdm_preview_html
@@ -97,16 +89,3 @@ def run(args: argparse.Namespace) -> int:
     if html:
         print(f"  wrote {html}")
     return 0
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Stand-alone entry point (``python -m pinflex.prbdm.cli``)."""
-    parser = argparse.ArgumentParser(prog="pinflex")
-    sub = parser.add_subparsers(dest="command", required=True)
-    add_parser(sub)
-    args = parser.parse_args(argv)
-    return args.func(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

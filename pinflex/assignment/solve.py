@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pinflex._arrays import readonly as _readonly
-from pinflex.assignment_qp.problem import AssignmentQP, QPSolution
+from pinflex.assignment.problem import AssignmentQP, QPSolution
 from pinflex.exceptions import AssignmentInfeasible
+from pinflex.linalg import readonly as _readonly
 
 
 def _scaled(problem: AssignmentQP):

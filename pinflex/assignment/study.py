@@ -39,12 +39,12 @@ from pathlib import Path
 
 import numpy as np
 
-from pinflex.assignment import Target
+from pinflex.assignment.driver import Target, assign_frequencies
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
 from pinflex.trajectory import Trajectory, benchmark_a_trajectory
 
-URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
+URDF_DIR = Path(__file__).resolve().parents[2] / "urdf"
 
 
 def builtin_path(name: str) -> Path:
@@ -167,8 +167,6 @@ def run_config(cfg: AssignmentConfig):
     Returns:
         ``(model, trajectory, result)``.
     """
-    from pinflex.assignment import assign_frequencies
-
     model = cfg.build_model()
     traj = cfg.build_trajectory(model)
     baseline = model.check_y(cfg.baseline) if cfg.baseline is not None else None

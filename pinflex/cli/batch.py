@@ -1,18 +1,14 @@
 """``pinflex batch``: resumable batch studies on Dask (``prbdm``, ``assign``, ``report``).
 
-Wire it into the main parser with :func:`add_parser`; ``python -m pinflex.batch.cli`` runs
-the same subcommands on its own.
+Registered on the main parser by :func:`add_parser`; errors and exit codes are those of
+:func:`pinflex.cli.main`.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import sys
-from collections.abc import Sequence
 from dataclasses import asdict
-
-from pinflex.exceptions import PinflexError
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -56,7 +52,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
     a = bsub.add_parser("assign", help="sweep assignment studies (targets x trajectories x "
                         "constraints)")
-    a.add_argument("config", help="TOML study file (see pinflex.config)")
+    a.add_argument("config", help="TOML study file (see pinflex.assignment.study)")
     a.add_argument("--sweep", action="append", default=[], metavar="KEY=V1,V2",
                    help="vary a study key over values, e.g. targets.0.freq_hz=185,190,195 or "
                    "constraints.mass_budget_kg=0.1,0.2 (repeatable: Cartesian product)")
@@ -98,7 +94,8 @@ def _finish(summary, args, unit: str) -> int:
 def cmd_prbdm(args: argparse.Namespace) -> int:
     """Run ``pinflex batch prbdm``."""
     from pinflex.batch.runner import run_prbdm
-    from pinflex.batch.tasks import DEFAULT_ALPHAS, PrbdmStudy
+    from pinflex.batch.tasks import PrbdmStudy
+    from pinflex.prbdm.options import DEFAULT_ALPHAS
 
     study = PrbdmStudy(
         seed=args.seed, n_beams=args.beams, links=tuple(args.links),
@@ -134,20 +131,3 @@ def cmd_report(args: argparse.Namespace) -> int:
     for path in pngs:
         print(f"wrote {path}")
     return 0
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run ``batch`` subcommands on their own (``python -m pinflex.batch.cli prbdm ...``)."""
-    parser = argparse.ArgumentParser(prog="pinflex")
-    sub = parser.add_subparsers(dest="command", required=True)
-    add_parser(sub)
-    args = parser.parse_args(["batch", *(sys.argv[1:] if argv is None else argv)])
-    try:
-        return int(args.func(args))
-    except PinflexError as exc:
-        print(f"pinflex: error: {exc}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,0 +1,7 @@
+"""``python -m pinflex``: the ``pinflex`` command."""
+
+import sys
+
+from pinflex.cli import main
+
+sys.exit(main())

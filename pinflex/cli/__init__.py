@@ -1,0 +1,76 @@
+"""The ``pinflex`` command line: one parser, one error handler, one exit-code convention.
+
+Each subcommand lives in its own module of this package and registers itself with an
+``add_parser(subparsers)`` function that sets ``func`` (a function of the parsed arguments
+returning the exit status). A new subcommand is a new module and one line in
+:data:`SUBCOMMANDS`.
+
+Exit status: 0 on success; 2 for a user error (a :class:`~pinflex.exceptions.PinflexError`,
+reported as one line ``pinflex: error: ...`` on stderr, or an argparse usage error); 1 for an
+internal error (any other exception, reported as one line; ``--debug`` shows the traceback);
+130 when interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+#: Modules of :mod:`pinflex.cli` that register a subcommand, in the order of ``--help``.
+SUBCOMMANDS: list[str] = [
+    "modes",
+    "assign",
+    "demo",
+    "view",
+    "batch",
+    "prbdm",
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``pinflex`` command, with every registered subcommand."""
+    from pinflex import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="pinflex",
+        description="Flexible-link robots on Pinocchio: modal analysis, Taylor modal models, "
+        "eigenfrequency assignment, pseudo-rigid-body models.",
+    )
+    parser.add_argument("--version", action="version", version=f"pinflex {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback of an error instead of one line")
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name in SUBCOMMANDS:
+        importlib.import_module(f"pinflex.cli.{name}").add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``pinflex`` command; returns the exit status.
+
+    Args:
+        argv: Arguments without the program name (default: ``sys.argv[1:]``).
+    """
+    from pinflex.exceptions import PinflexError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except PinflexError as exc:
+        if args.debug:
+            raise
+        print(f"pinflex: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        print("pinflex: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001 - the one place that turns bugs into a status
+        if args.debug:
+            raise
+        print(f"pinflex: internal error: {type(exc).__name__}: {exc} "
+              "(rerun with --debug for the traceback)", file=sys.stderr)
+        return 1

@@ -1,0 +1,73 @@
+"""``pinflex assign``: eigenfrequency assignment along a trajectory from a TOML study."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+
+def add_parser(sub) -> None:
+    """Register the ``assign`` subcommand on an ``argparse`` subparsers object."""
+    p = sub.add_parser("assign", help="assign eigenfrequencies along a trajectory (TOML study)")
+    p.add_argument("config", help="TOML study file (see pinflex.assignment.study)")
+    p.add_argument("--out", default=None, help="folder for the charts (default: none)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--html", default=None, metavar="FILE", help="write an HTML preview")
+    p.set_defaults(func=cmd_assign)
+
+
+def summary(result, total_s: float) -> dict:
+    """The JSON summary of an assignment result and its total time [s]."""
+    return {
+        "design": result.design,
+        "max_error_before": result.max_error_before,
+        "max_error_after": result.max_error_after,
+        "predicted_max_error_after": result.predicted_max_error_after,
+        "qp_iterations": int(result.solution.iterations),
+        "qp_time_s": float(result.solution.time_s),
+        "refinements": result.refinements,
+        "timings_s": result.timings_s,
+        "total_time_s": total_s,
+    }
+
+
+def write_preview(model, traj, result, path) -> str | None:
+    """Write the assignment's HTML preview; its path, or None without the preview extra."""
+    try:
+        from pinflex.visualization import assignment_preview_html
+    except ImportError:
+        return None
+    return str(assignment_preview_html(model, traj, result, path))
+
+
+def cmd_assign(args: argparse.Namespace) -> int:
+    """Run ``pinflex assign``."""
+    from pinflex.assignment.charts import assignment_charts
+    from pinflex.assignment.study import load_config, run_config
+
+    t0 = time.perf_counter()
+    cfg = load_config(args.config)
+    model, traj, result = run_config(cfg)
+    total = time.perf_counter() - t0
+    charts = []
+    if args.out:
+        charts = [str(p) for p in assignment_charts(result, traj.times_s, args.out)]
+    html = write_preview(model, traj, result, args.html) if args.html else None
+    out = summary(result, total)
+    out["charts"] = charts
+    out["html"] = html
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
+    print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
+          f"{100 * result.max_error_after:.2f} % "
+          f"(predicted {100 * result.predicted_max_error_after:.2f} %)")
+    print(f"QP: {result.solution.iterations} iterations, {1e3 * result.solution.time_s:.3f} ms; "
+          f"total {total:.3f} s")
+    for c in charts:
+        print(f"wrote {c}")
+    if html:
+        print(f"wrote {html}")
+    return 0

@@ -1,0 +1,55 @@
+"""``pinflex modes``: eigenfrequencies of a flexible URDF arm at one pose."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from pinflex.cli.common import add_robot_arguments, parse_values
+
+
+def add_parser(sub) -> None:
+    """Register the ``modes`` subcommand on an ``argparse`` subparsers object."""
+    p = sub.add_parser("modes", help="eigenfrequencies of a flexible URDF arm at a pose")
+    add_robot_arguments(p)
+    p.add_argument("--modes", type=int, default=None, help="number of modes to report")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_modes)
+
+
+def cmd_modes(args: argparse.Namespace) -> int:
+    """Run ``pinflex modes``."""
+    from pinflex.erls import FlexibleModel
+
+    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set))
+    q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
+    result = model.modes(q, n_modes=args.modes)
+    freqs = result.freq_hz
+    if args.json:
+        out = {
+            "robot": model.description.name,
+            "planar": model.planar,
+            "coordinates": model.coordinates,
+            "joint_names": list(model.joint_names),
+            "q": q.tolist(),
+            "design": {d.name: float(v) for d, v in zip(model.design, result.y)},
+            "ndof": model.ndof,
+            "elastic_dof": model.nx,
+            "rigid_modes": result.rigid_modes,
+            "frequencies_hz": freqs.tolist(),
+        }
+        print(json.dumps(out))
+        return 0
+    print(f"{model.description.name}: {model.ndof} dof ({model.nx} elastic + {model.nv} rigid), "
+          f"{'planar' if model.planar else 'spatial'}, {model.coordinates} joint coordinates")
+    print("q = " + ", ".join(f"{n}={v:.6g}" for n, v in zip(model.joint_names, q)))
+    if model.ny:
+        values = ", ".join(f"{d.name}={v:.6g} kg" for d, v in zip(model.design, result.y))
+        print(f"design: {values}")
+    print(f"rigid modes: {result.rigid_modes}")
+    print(f"{'mode':>4}  {'frequency [Hz]':>16}")
+    for i, f in enumerate(freqs, start=1):
+        print(f"{i:>4}  {f:>16.6f}")
+    return 0
