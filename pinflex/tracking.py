@@ -1,0 +1,461 @@
+r"""Modes along a motion: follow each mode by its shape, report crossings and veering.
+
+Sorting eigenfrequencies is not tracking. Along a trajectory two modes can *cross* (their
+frequencies pass through each other, e.g. an in-plane and an out-of-plane mode of an arm that
+moves in a plane, which do not interact) or *veer* (coupled modes approach, exchange their
+shapes and move apart again without crossing). "Mode 2" of a sorted list then names different
+physical modes at different samples, and a Taylor series of an eigenvalue, which follows its
+analytic branch, stops describing the sorted mode it was expanded for.
+
+This module follows every mode by shape. The similarity of two shapes is the mass-weighted
+modal assurance criterion
+
+.. math:: \mathrm{MAC}(\phi_a, \phi_b) = \frac{(\phi_a^T M \phi_b)^2}
+          {(\phi_a^T M \phi_a)(\phi_b^T M \phi_b)} \in [0, 1],
+
+with ``M`` the mass matrix of the sample the comparison is made at. Each sample is matched to
+the previous one (a chain, robust to slow drift of the shapes) by the one-to-one assignment
+that maximises the summed MAC (``scipy.optimize.linear_sum_assignment``); the MAC against
+the reference sample's shapes is kept as data too.
+
+Public API:
+
+* :func:`track_modes` ``(model, Q, y=None, *, modes=(1,), reference=None, extra=3, ...)``:
+  eigenpairs of a :class:`~pinflex.erls.FlexibleModel` along joint samples ``Q`` (and
+  designs ``y``: one, or one per sample) and their tracking. ``reference`` is a sample index
+  or a point ``(q0, y0)`` off the trajectory (e.g. a Taylor expansion point): mode numbers
+  are the sorted numbers **at the reference**, and the path from the reference to the nearest
+  sample is walked in small steps so the identity carries over.
+* :func:`track` ``(eigvals, shapes, mass=None, *, modes, start=0, ...)``: the same on plain
+  arrays (any symmetric generalized eigenproblem sampled along a path), for callers that have
+  their own eigenpairs.
+* :func:`mac_matrix` ``(phi_a, phi_b, mass=None)``: MAC of every column pair.
+
+Both trackers return a :class:`ModeTracking`:
+
+* ``freq_hz`` (ns, k): the tracked frequencies of ``modes`` [Hz] (column c follows mode
+  ``modes[c]`` of the reference); ``eigvals`` the same in λ = ω² [rad²/s²];
+* ``order`` (ns, k): the sorted (1-based) mode number the tracked mode has at each sample,
+  so ``sorted_hz[s, order[s, c] - 1] == freq_hz[s, c]``; ``permutation`` (ns, n) the same
+  for every tracked mode (a permutation of ``0..n-1`` per sample);
+* ``mac_step`` (ns, k): MAC of each tracked mode with itself at the previous sample of the
+  walk (1 at the reference); ``mac_reference`` (ns, k): MAC against the reference shapes;
+* ``events``: :class:`ModeEvent` records, ``kind`` one of
+
+  - ``"crossing"``: two tracked modes exchange their sorted positions between samples
+    ``sample - 1`` and ``sample`` (a MAC swap);
+  - ``"veering"``: two modes that are neighbours in frequency come within ``veer_rtol``
+    (relative) of each other at ``sample`` without swapping, and their shapes rotate: the
+    MAC of a mode's shape before and after the approach (where the gap has doubled, or the
+    ends of the trajectory) is below ``veer_mac``;
+  - ``"ambiguous"``: a step's best match has ``MAC < mac_min``: the sampling is too coarse
+    to follow that mode (refine the trajectory near ``sample``);
+
+* ``crossings(mode)`` / ``veerings(mode)``: the events that involve a mode;
+  ``changes_identity(mode)``: whether the sorted number of a mode differs from its
+  reference number anywhere (then sorted and tracked results differ).
+
+Mode numbers are non-rigid modes, 1 = lowest. Shapes of a :class:`FlexibleModel` are the
+elastic coordinates (beam axes of each link, so they change smoothly with the pose) with the
+rigid coordinates condensed out, mass-normalised with the condensed mass matrix — the same
+reduced problem as :meth:`~pinflex.erls.FlexibleModel.frequencies`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from pinflex.exceptions import ConfigurationError, EigenSolverError
+
+__all__ = [
+    "ModeEvent",
+    "ModeTracking",
+    "eigenpairs",
+    "mac_matrix",
+    "track",
+    "track_modes",
+]
+
+
+@dataclass(frozen=True)
+class ModeEvent:
+    """One event along a tracked motion.
+
+    Attributes:
+        kind: ``"crossing"``, ``"veering"`` or ``"ambiguous"`` (see :mod:`pinflex.tracking`).
+        sample: Trajectory sample of the event (for a crossing, the first sample after it).
+        modes: Reference mode numbers involved (1 = lowest at the reference); one number for
+            ``"ambiguous"``.
+        freq_hz: Their tracked frequencies at ``sample`` [Hz].
+        gap: Smallest relative frequency gap of the pair near the event (0 for ambiguous).
+        mac: For a crossing or ambiguous step, the MAC of the chosen match; for veering, the
+            MAC of the shape before and after the approach.
+    """
+
+    kind: str
+    sample: int
+    modes: tuple[int, ...]
+    freq_hz: tuple[float, ...]
+    gap: float
+    mac: float
+
+
+@dataclass(frozen=True)
+class ModeTracking:
+    """Modes followed by shape along a motion (see :mod:`pinflex.tracking`).
+
+    Attributes:
+        modes: Reference mode numbers reported in ``freq_hz`` (1 = lowest at the reference).
+        eigvals: Tracked eigenvalues λ [rad²/s²], (ns, len(modes)).
+        order: Sorted mode number (1-based) of each tracked mode at each sample, (ns, k).
+        sorted_eigvals: Sorted eigenvalues of every tracked mode slot, (ns, n).
+        permutation: ``permutation[s, r]`` = sorted index (0-based) at sample s of the mode
+            that has sorted index r at the reference, (ns, n).
+        mac_step: MAC with the previous sample of the walk, (ns, k).
+        mac_reference: MAC against the reference shapes, (ns, k).
+        events: Crossings, veering and ambiguous steps, sorted by sample.
+        reference: Sample index the walk started from (the nearest sample to an off-trajectory
+            reference point).
+    """
+
+    modes: tuple[int, ...]
+    eigvals: np.ndarray
+    order: np.ndarray
+    sorted_eigvals: np.ndarray
+    permutation: np.ndarray
+    mac_step: np.ndarray
+    mac_reference: np.ndarray
+    events: tuple[ModeEvent, ...] = field(default=())
+    reference: int = 0
+
+    @property
+    def freq_hz(self) -> np.ndarray:
+        """Tracked frequencies [Hz], (ns, len(modes))."""
+        return np.sqrt(np.maximum(self.eigvals, 0.0)) / (2.0 * np.pi)
+
+    @property
+    def sorted_hz(self) -> np.ndarray:
+        """Sorted frequencies [Hz] of all tracked slots, (ns, n)."""
+        return np.sqrt(np.maximum(self.sorted_eigvals, 0.0)) / (2.0 * np.pi)
+
+    def _involving(self, kind: str, mode: int | None) -> list[ModeEvent]:
+        return [e for e in self.events if e.kind == kind and (mode is None or mode in e.modes)]
+
+    def crossings(self, mode: int | None = None) -> list[ModeEvent]:
+        """Crossing events, all or those involving reference mode ``mode``."""
+        return self._involving("crossing", mode)
+
+    def veerings(self, mode: int | None = None) -> list[ModeEvent]:
+        """Veering events, all or those involving reference mode ``mode``."""
+        return self._involving("veering", mode)
+
+    def ambiguous(self, mode: int | None = None) -> list[ModeEvent]:
+        """Steps where a mode could not be matched with confidence."""
+        return self._involving("ambiguous", mode)
+
+    def changes_identity(self, mode: int) -> bool:
+        """Whether reference mode ``mode`` has another sorted number at some sample."""
+        return bool(np.any(self.permutation[:, mode - 1] != mode - 1))
+
+
+def mac_matrix(phi_a: np.ndarray, phi_b: np.ndarray, mass: np.ndarray | None = None
+               ) -> np.ndarray:
+    """Mass-weighted MAC of every column of ``phi_a`` (n, ka) with every column of ``phi_b``.
+
+    Args:
+        phi_a: Shapes (n, ka).
+        phi_b: Shapes (n, kb).
+        mass: Symmetric positive definite weight (n, n); identity when omitted.
+
+    Returns:
+        (ka, kb) values in [0, 1].
+    """
+    phi_a = np.asarray(phi_a, dtype=float)
+    phi_b = np.asarray(phi_b, dtype=float)
+    ma = phi_a if mass is None else mass @ phi_a
+    mb = phi_b if mass is None else mass @ phi_b
+    cross = phi_a.T @ mb
+    na = np.einsum("ik,ik->k", phi_a, ma)
+    nb = np.einsum("ik,ik->k", phi_b, mb)
+    return cross**2 / np.outer(na, nb)
+
+
+def eigenpairs(model, Q, y=None, *, n_modes: int | None = None, check_bounds: bool = True):
+    """Non-rigid eigenpairs of a FlexibleModel at many poses, batched.
+
+    Args:
+        model: A :class:`~pinflex.erls.FlexibleModel`.
+        Q: Joint samples (ns, nv), user coordinates.
+        y: Design values (ny,) or one per sample (ns, ny) [kg] (default nominal).
+        n_modes: Lowest modes to return (default all).
+        check_bounds: Refuse design values outside their bounds.
+
+    Returns:
+        ``(eigvals, shapes, mass)``: λ (ns, k) ascending [rad²/s²]; shapes (ns, nx, k) over
+        the elastic coordinates, mass-normalised with the condensed mass; that mass
+        (ns, nx, nx).
+
+    Raises:
+        EigenSolverError: the condensed mass is not positive definite or an elastic
+            eigenvalue is not positive (an unrestrained or degenerate structure).
+    """
+    from pinflex.erls.modal import reduced
+
+    Q = np.atleast_2d(model.check_q(Q))
+    M, K = model.matrices(Q, y, check_bounds=check_bounds)
+    Mred, Kxx = reduced(model, M, K)
+    try:
+        L = np.linalg.cholesky(Mred)
+    except np.linalg.LinAlgError as exc:
+        raise EigenSolverError("the condensed elastic mass matrix is not positive") from exc
+    Li = np.linalg.inv(L)
+    A = Li @ Kxx @ np.swapaxes(Li, -1, -2)
+    A = 0.5 * (A + np.swapaxes(A, -1, -2))
+    lam, Z = np.linalg.eigh(A)
+    k = model.nx if n_modes is None else min(int(n_modes), model.nx)
+    lam, Z = lam[:, :k], Z[:, :, :k]
+    if not np.all(np.isfinite(lam)) or np.any(lam <= 0.0):
+        raise EigenSolverError(
+            "a non-positive or non-finite elastic eigenvalue appeared along the samples: the "
+            "structure is not restrained or the model is degenerate"
+        )
+    shapes = np.swapaxes(Li, -1, -2) @ Z
+    return lam, shapes, Mred
+
+
+def _walk_order(ns: int, start: int) -> list[tuple[int, int]]:
+    """(previous, current) steps outward from ``start`` in both directions."""
+    steps = [(s - 1, s) for s in range(start + 1, ns)]
+    steps += [(s + 1, s) for s in range(start - 1, -1, -1)]
+    return steps
+
+
+def track(
+    eigvals: np.ndarray,
+    shapes: np.ndarray,
+    mass: np.ndarray | None = None,
+    *,
+    modes: Sequence[int] = (1,),
+    start: int = 0,
+    start_shapes: np.ndarray | None = None,
+    mac_min: float = 0.5,
+    veer_rtol: float = 0.05,
+    veer_mac: float = 0.5,
+) -> ModeTracking:
+    """Follow modes by shape through sampled eigenpairs.
+
+    Args:
+        eigvals: Sorted eigenvalues (ns, n) [rad²/s²] (any monotone quantity works).
+        shapes: Shapes (ns, ndof, n), columns in the order of ``eigvals``.
+        mass: Mass matrices (ns, ndof, ndof) for the MAC weight; identity when omitted.
+        modes: Mode numbers (1-based, at sample ``start``) to report; every one of the n
+            slots is tracked, so keep a few modes above the highest requested one.
+        start: Sample where the numbering is defined.
+        start_shapes: Shapes (ndof, n) that define the numbering instead of those of
+            ``start`` (e.g. from an off-trajectory reference point); sample ``start`` is
+            then matched to them first.
+        mac_min: A match below this MAC is reported as ``"ambiguous"``.
+        veer_rtol: Relative gap under which neighbouring modes count as approaching.
+        veer_mac: Shape-rotation threshold of a veering (MAC before vs after).
+
+    Returns:
+        A :class:`ModeTracking`.
+    """
+    lam = np.asarray(eigvals, dtype=float)
+    phi = np.asarray(shapes, dtype=float)
+    if lam.ndim != 2 or phi.ndim != 3 or phi.shape[0] != lam.shape[0] or \
+            phi.shape[2] != lam.shape[1]:
+        raise ConfigurationError(
+            f"eigvals (ns, n) and shapes (ns, ndof, n) do not match: {lam.shape}, {phi.shape}"
+        )
+    ns, n = lam.shape
+    modes = tuple(int(m) for m in np.atleast_1d(modes))
+    if not modes or min(modes) < 1 or max(modes) > n:
+        raise ConfigurationError(f"modes {modes} must lie in 1..{n} (the tracked modes)")
+    if not 0 <= start < ns:
+        raise ConfigurationError(f"start sample {start} is not in 0..{ns - 1}")
+    if mass is not None:
+        mass = np.asarray(mass, dtype=float)
+        if mass.shape != (ns, phi.shape[1], phi.shape[1]):
+            raise ConfigurationError(
+                f"mass has shape {mass.shape}; expected {(ns, phi.shape[1], phi.shape[1])}"
+            )
+
+    def weight(s):
+        return None if mass is None else mass[s]
+
+    perm = np.full((ns, n), -1, dtype=int)  # slot r (reference sorted index) -> sorted index
+    mac_step = np.ones((ns, n))
+    ambiguous: list[tuple[int, int, float]] = []
+    if start_shapes is None:
+        perm[start] = np.arange(n)
+    else:
+        C = mac_matrix(np.asarray(start_shapes, dtype=float), phi[start], weight(start))
+        rows, cols = linear_sum_assignment(-C)
+        perm[start, rows] = cols
+        mac_step[start, rows] = C[rows, cols]
+    ref_shapes = phi[start][:, perm[start]]  # reference shape of each slot, at `start`
+    for prev, cur in _walk_order(ns, start):
+        slots_prev = phi[prev][:, perm[prev]]
+        C = mac_matrix(slots_prev, phi[cur], weight(cur))
+        rows, cols = linear_sum_assignment(-C)
+        perm[cur, rows] = cols
+        mac_step[cur, rows] = C[rows, cols]
+    for r in range(n):
+        bad = np.flatnonzero(mac_step[:, r] < mac_min)
+        ambiguous.extend((int(s), r, float(mac_step[s, r])) for s in bad)
+    mac_ref = np.empty((ns, n))
+    for s in range(ns):
+        mac_ref[s] = np.diag(mac_matrix(ref_shapes, phi[s][:, perm[s]], weight(s)))
+    tracked = np.take_along_axis(lam, perm, axis=1)  # (ns, n) by slot
+    events = _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac,
+                     mac_step)
+    cols = [m - 1 for m in modes]
+    return ModeTracking(
+        modes=modes,
+        eigvals=tracked[:, cols],
+        order=perm[:, cols] + 1,
+        sorted_eigvals=lam,
+        permutation=perm,
+        mac_step=mac_step[:, cols],
+        mac_reference=mac_ref[:, cols],
+        events=tuple(sorted(events, key=lambda e: (e.sample, e.kind, e.modes))),
+        reference=int(start),
+    )
+
+
+def _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac, mac_step):
+    ns, n = lam.shape
+    events: list[ModeEvent] = []
+    f = np.sqrt(np.maximum(tracked, 0.0)) / (2.0 * np.pi)
+    for s, r, mac in ambiguous:
+        events.append(ModeEvent("ambiguous", s, (r + 1,), (float(f[s, r]),), 0.0, mac))
+    # crossings: the sorted order of two slots flips between consecutive samples
+    for a in range(n):
+        for b in range(a + 1, n):
+            sign = np.sign(perm[:, a] - perm[:, b])
+            flips = np.flatnonzero(sign[1:] != sign[:-1]) + 1
+            for s in flips:
+                gap = min(abs(f[t, a] - f[t, b]) / max(f[t, a], f[t, b]) for t in (s - 1, s))
+                events.append(ModeEvent(
+                    "crossing", int(s), (a + 1, b + 1), (float(f[s, a]), float(f[s, b])),
+                    float(gap), float(min(mac_step[s, a], mac_step[s, b])),
+                ))
+    # veering: sorted neighbours approach within veer_rtol and exchange shape character
+    if ns >= 3:
+        fs = np.sqrt(np.maximum(lam, 0.0))
+        gaps = (fs[:, 1:] - fs[:, :-1]) / fs[:, :-1]  # relative frequency gap of sorted i, i+1
+        inv = np.argsort(perm, axis=1)  # sorted index -> slot
+        for i in range(n - 1):
+            g = gaps[:, i]
+            for s in range(1, ns - 1):
+                if not (g[s] <= g[s - 1] and g[s] < g[s + 1] and g[s] < veer_rtol):
+                    continue
+                a, b = sorted((int(inv[s, i]), int(inv[s, i + 1])))
+                left, right = s, s
+                while left > 0 and g[left - 1] < 2 * g[s] and g[left - 1] >= g[left]:
+                    left -= 1
+                while right < ns - 1 and g[right + 1] < 2 * g[s] and g[right + 1] >= g[right]:
+                    right += 1
+                left, right = max(left - 1, 0), min(right + 1, ns - 1)
+                if np.any(np.sign(perm[left:right + 1, a] - perm[left:right + 1, b])
+                          != np.sign(perm[s, a] - perm[s, b])):
+                    continue  # the pair swaps here: a crossing, reported above
+                # the mode's own shape before and after the approach
+                C = mac_matrix(phi[left][:, [perm[left, a]]], phi[right][:, [perm[right, a]]],
+                               weight(right))
+                mac = float(C[0, 0])
+                if mac < veer_mac:
+                    events.append(ModeEvent(
+                        "veering", int(s), (a + 1, b + 1),
+                        (float(f[s, a]), float(f[s, b])), float(g[s]), mac,
+                    ))
+    return events
+
+
+def track_modes(
+    model,
+    Q,
+    y=None,
+    *,
+    modes: Sequence[int] = (1,),
+    reference=None,
+    extra: int = 3,
+    mac_min: float = 0.5,
+    veer_rtol: float = 0.05,
+    veer_mac: float = 0.5,
+    check_bounds: bool = True,
+) -> ModeTracking:
+    """Track modes of a FlexibleModel by shape along joint samples.
+
+    Args:
+        model: A :class:`~pinflex.erls.FlexibleModel`.
+        Q: Joint samples (ns, nv), user coordinates, in the order of the motion.
+        y: Design values (ny,) or one per sample (ns, ny) [kg] (default nominal).
+        modes: Non-rigid mode numbers to report (1 = lowest at the reference).
+        reference: Where mode numbers are defined: ``None`` (sample 0), a sample index, or a
+            point ``(q0, y0)`` (``y0`` may be ``None``: the design ``y`` of the nearest
+            sample), e.g. a Taylor model's expansion point. From a point the walk goes in
+            straight steps (in joints and design) to the nearest sample, as fine as the
+            trajectory's own median step, then along the trajectory both ways.
+        extra: Modes tracked above the highest requested one (a mode can leave the lowest
+            ones only if its partner is tracked).
+        mac_min: See :func:`track`.
+        veer_rtol: See :func:`track`.
+        veer_mac: See :func:`track`.
+        check_bounds: Refuse design values outside their bounds.
+
+    Returns:
+        A :class:`ModeTracking`; ``sorted_eigvals`` holds the lowest ``max(modes) + extra``
+        modes.
+    """
+    Q = np.atleast_2d(model.check_q(Q))
+    ns = Q.shape[0]
+    Y = model.check_y(y, bounds=check_bounds)
+    Yb = np.broadcast_to(Y, (ns, model.ny)) if Y.ndim == 1 else Y
+    if Yb.shape[0] != ns:
+        raise ConfigurationError(f"got {Yb.shape[0]} design vectors for {ns} samples")
+    modes = tuple(int(m) for m in np.atleast_1d(modes))
+    if not modes or min(modes) < 1 or max(modes) > model.nx:
+        raise ConfigurationError(f"modes {modes} must lie in 1..{model.nx}")
+    n = min(model.nx, max(modes) + max(int(extra), 0))
+    lam, phi, mass = eigenpairs(model, Q, Yb, n_modes=n, check_bounds=check_bounds)
+    start, start_shapes = 0, None
+    if reference is not None and np.ndim(reference) == 0 and not isinstance(reference, tuple):
+        start = int(reference)
+        if not 0 <= start < ns:
+            raise ConfigurationError(f"reference sample {start} is not in 0..{ns - 1}")
+    elif reference is not None:
+        q0, y0 = reference
+        q0 = model.check_q(q0)
+        start = int(np.argmin(np.linalg.norm(Q - q0, axis=1)))
+        y0 = Yb[start] if y0 is None else model.check_y(y0, bounds=check_bounds)
+        start_shapes = _lead_in(model, Q, Yb, start, q0, y0, n, mac_min, check_bounds)
+    return track(lam, phi, mass, modes=modes, start=start, start_shapes=start_shapes,
+                 mac_min=mac_min, veer_rtol=veer_rtol, veer_mac=veer_mac)
+
+
+def _lead_in(model, Q, Y, start, q0, y0, n, mac_min, check_bounds):
+    """Shapes at ``Q[start]`` numbered as at the point (q0, y0), walked in small steps."""
+    qs, ys = Q[start], Y[start]
+    if Q.shape[0] > 1:
+        step = float(np.median(np.linalg.norm(np.diff(Q, axis=0), axis=1)))
+    else:
+        step = 0.0
+    dq = float(np.linalg.norm(qs - q0))
+    # design moves are walked in 20 steps per full span of the bounds
+    span = np.array([max(d.upper - d.lower, 1e-12) if np.isfinite(d.upper - d.lower) else
+                     max(abs(d.nominal), 1.0) for d in model.design])
+    dy = float(np.max(np.abs(ys - y0) / span)) if model.ny else 0.0
+    nsteps = int(np.ceil(max(dq / step if step > 0 else 0.0, 20.0 * dy, 1.0)))
+    t = np.linspace(0.0, 1.0, nsteps + 1)[:, None]
+    Qp = q0 + t * (qs - q0)
+    Yp = y0 + t * (ys - y0)
+    lam, phi, mass = eigenpairs(model, Qp, Yp, n_modes=n, check_bounds=check_bounds)
+    walk = track(lam, phi, mass, modes=tuple(range(1, n + 1)), start=0, mac_min=mac_min)
+    # shapes of the last lead-in point, ordered by the reference's numbering
+    return phi[-1][:, walk.permutation[-1]]
