@@ -7,7 +7,15 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped in ``
 
     [trajectory]
     builtin = "benchmark_a"        # or: csv = "traj.csv" (columns t, then joints, in the
-                                   # model's user coordinates)
+                                   # model's user coordinates), or a 3-D workspace path:
+    # [trajectory.path]            # (see pinflex.native.workspace.path_from_spec)
+    # frame = "ee_link"
+    # waypoints = [[0, 0.3, -0.1], [-0.2, 0.3, 0]]   # [m]
+    # relative = true              # offsets from the frame at start_q
+    # start_q = [0, -1.2, 1.5, -1.9, -1.57, 0]
+    # samples = 40
+    # duration_s = 2.0
+    # orientation = "keep"         # or "free" (position only), or [roll, pitch, yaw]
 
     [expansion]
     q0 = [1.817, 5.312]            # default: the middle sample
@@ -110,7 +118,13 @@ class AssignmentConfig:
             return user_trajectory(model, self.trajectory["builtin"])
         if "csv" in self.trajectory:
             return Trajectory.from_csv(resolve(self.trajectory["csv"], self.folder))
-        raise ConfigurationError("[trajectory] needs builtin = \"...\" or csv = \"...\"")
+        if "path" in self.trajectory:
+            from pinflex.native.workspace import path_from_spec
+
+            return path_from_spec(model, self.trajectory["path"], name="path")
+        raise ConfigurationError(
+            "[trajectory] needs builtin = \"...\", csv = \"...\" or a [trajectory.path] table"
+        )
 
 
 def load_config(path: str | Path) -> AssignmentConfig:

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 #: Modules of :mod:`pinflex.cli` that register a subcommand, in the order of ``--help``.
 SUBCOMMANDS: list[str] = [
     "modes",
+    "path",
     "assign",
     "demo",
     "view",

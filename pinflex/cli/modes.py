@@ -16,6 +16,11 @@ def add_parser(sub) -> None:
     add_robot_arguments(p)
     p.add_argument("--modes", type=int, default=None, help="number of modes to report")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--trajectory", metavar="CSV",
+                   help="joint trajectory (header: t, joint names): frequencies along the "
+                   "motion, modes followed by their shapes (default 3 modes)")
+    p.add_argument("--csv", metavar="OUT", help="with --trajectory: write one row per sample")
+    p.add_argument("--png", metavar="OUT", help="with --trajectory: write a chart")
     p.set_defaults(func=cmd_modes)
 
 
@@ -24,6 +29,12 @@ def cmd_modes(args: argparse.Namespace) -> int:
     from pinflex.erls import FlexibleModel
 
     model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set))
+    if args.trajectory is not None:
+        return _along(model, args)
+    if args.csv or args.png:
+        from pinflex.exceptions import ConfigurationError
+
+        raise ConfigurationError("--csv and --png go with --trajectory")
     q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
     result = model.modes(q, n_modes=args.modes)
     freqs = result.freq_hz
@@ -52,4 +63,24 @@ def cmd_modes(args: argparse.Namespace) -> int:
     print(f"{'mode':>4}  {'frequency [Hz]':>16}")
     for i, f in enumerate(freqs, start=1):
         print(f"{i:>4}  {f:>16.6f}")
+    return 0
+
+
+def _along(model, args: argparse.Namespace) -> int:
+    from pinflex.native.along import modes_along
+    from pinflex.trajectory import Trajectory
+
+    traj = Trajectory.from_csv(args.trajectory)
+    res = modes_along(model, traj, modes=args.modes or 3)
+    if args.csv:
+        res.to_csv(args.csv)
+    if args.png:
+        res.plot(args.png)
+    if args.json:
+        print(res.to_json())
+    else:
+        print(res.table())
+        for label, path in (("table", args.csv), ("chart", args.png)):
+            if path:
+                print(f"{label}: {path}")
     return 0
