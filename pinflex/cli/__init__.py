@@ -22,6 +22,7 @@ from collections.abc import Sequence
 SUBCOMMANDS: list[str] = [
     "modes",
     "path",
+    "export",
     "assign",
     "demo",
     "view",

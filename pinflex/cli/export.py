@@ -1,0 +1,53 @@
+"""``pinflex export``: M, K, damping and a state-space model for control design."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from pinflex.cli.common import add_robot_arguments, parse_values
+
+
+def add_parser(sub) -> None:
+    """Register the ``export`` subcommand on an ``argparse`` subparsers object."""
+    p = sub.add_parser(
+        "export", help="M, K, damping and state-space (A, B, C, D) to .npz or .mat",
+        description="Linear model at a pose (--q) or at every sample of a trajectory "
+        "(--trajectory). Coordinates p = [x; q]: elastic nodal coordinates then joints; "
+        "state [p; dp/dt]; inputs: joint torques; outputs: p. See docs/exports.md.",
+    )
+    add_robot_arguments(p)
+    p.add_argument("--trajectory", metavar="CSV", help="export at every sample of a trajectory")
+    p.add_argument("--zeta", type=float, default=0.0,
+                   help="modal damping ratio of every elastic mode (default 0)")
+    p.add_argument("--rayleigh", type=float, nargs=2, metavar=("ALPHA", "BETA"),
+                   help="Rayleigh damping alpha M + beta K [1/s, s]")
+    p.add_argument("--out", required=True, help="output file, .npz or .mat")
+    p.set_defaults(func=cmd_export)
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    """Run ``pinflex export``."""
+    from pinflex.erls import FlexibleModel
+    from pinflex.native.export import linear_model, save_linear_model
+
+    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set))
+    times = None
+    if args.trajectory:
+        from pinflex.native.along import trajectory_for
+        from pinflex.trajectory import Trajectory
+
+        traj = Trajectory.from_csv(args.trajectory)
+        q = trajectory_for(model, traj)
+        times = traj.times_s
+    else:
+        q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
+    data = linear_model(model, q, zeta=args.zeta, rayleigh=args.rayleigh)
+    if times is not None:
+        data["times_s"] = np.asarray(times)
+    path = save_linear_model(data, args.out)
+    shape = "x".join(str(s) for s in data["A"].shape)
+    print(f"wrote {path}: A {shape}, {model.ndof} coordinates ({model.nx} elastic + "
+          f"{model.nv} joints), {model.nv} inputs (joint torques)")
+    return 0

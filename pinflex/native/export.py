@@ -1,0 +1,121 @@
+"""Linear models for control design: M, K, damping and a state-space model (A, B, C, D).
+
+At a pose ``q`` (at rest, ``q̇ = 0``, no gravity) the ERLS equations of small motion are
+
+    M p̈ + Dₚ ṗ + K p = Bᵤ τ,       p = [x; q]  (ndof = nx + nv),
+
+with ``x`` the elastic nodal coordinates (``arm.x_names``: ``<link>.n<k>.<u|r><x|y|z>``, small
+translations [m] and rotations [rad] of beam node k in the beam axes of its link) and ``q`` the
+joint coordinates (``arm.joint_names``, the arm's convention), and ``τ`` the joint torques
+(forces for prismatic joints) acting on the joint coordinates: ``Bᵤ = [0; I_nv]`` in relative
+coordinates (for absolute ones, ``Bᵤ = [0; Cᵀ]`` with ``q_rel = C q_abs``, so that ``τ`` still
+acts on each joint).
+
+State ``z = [p; ṗ]`` (2 ndof): ``A = [[0, I], [−M⁻¹K, −M⁻¹Dₚ]]``, ``B = [[0], [M⁻¹Bᵤ]]``,
+``C = [I, 0]`` (outputs: every generalized position) and ``D = 0``. With no damping the
+eigenvalues of ``A`` are ``±iω`` of the modal problem plus ``2 nv`` zeros (the free joints'
+rigid motion).
+
+Damping ``Dₚ``: none (default), modal (a ratio ζ for every elastic mode:
+``Dₚ = M Φ diag(2 ζ ω) Φᵀ M`` with the mass-normalised elastic mode shapes ``Φ``, leaving the
+rigid modes undamped), or Rayleigh ``Dₚ = α M + β K``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg
+
+from pinflex.exceptions import ConfigurationError
+
+
+def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh) -> dict:
+    M, K = arm.matrices(q, y)
+    nd, nv, nx = arm.ndof, arm.nv, arm.nx
+    if rayleigh is not None:
+        alpha, beta = (float(v) for v in rayleigh)
+        damping = alpha * M + beta * K
+    else:
+        damping = np.zeros_like(M)
+    lam, phi = scipy.linalg.eigh(K, M)
+    # the elastic modes are the nx largest (the nv rigid ones have λ = 0)
+    lam_e, phi_e = lam[nv:], phi[:, nv:]
+    if zeta:
+        w = np.sqrt(np.clip(lam_e, 0.0, None))
+        MP = M @ phi_e
+        damping = damping + MP @ np.diag(2.0 * zeta * w) @ MP.T
+    Bu = np.zeros((nd, nv))
+    Bu[nx:, :] = arm.coord_map.T
+    sol = np.linalg.solve(M, np.hstack([K, damping, Bu]))
+    A = np.zeros((2 * nd, 2 * nd))
+    A[:nd, nd:] = np.eye(nd)
+    A[nd:, :nd] = -sol[:, :nd]
+    A[nd:, nd:] = -sol[:, nd:2 * nd]
+    B = np.vstack([np.zeros((nd, nv)), sol[:, 2 * nd:]])
+    C = np.hstack([np.eye(nd), np.zeros((nd, nd))])
+    freq = np.sqrt(arm.eigvals_from(M, K)) / (2.0 * np.pi)
+    return {"M": M, "K": K, "damping": damping, "A": A, "B": B, "C": C,
+            "D": np.zeros((nd, nv)), "freq_hz": freq}
+
+
+def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None) -> dict:
+    """M, K, damping and (A, B, C, D) at one pose (nv,) or along poses (ns, nv).
+
+    Args:
+        arm: A :class:`~pinflex.FlexibleModel`.
+        q: Joint coordinates, one pose (nv,) or several (ns, nv) (Pinocchio configurations
+            of length nq are accepted) [rad or m].
+        y: Design values [kg] (default: nominal).
+        zeta: Modal damping ratio of every elastic mode (>= 0).
+        rayleigh: ``(alpha [1/s], beta [s])`` for ``α M + β K``, added to the modal damping.
+
+    Returns:
+        A dictionary of arrays: ``M``, ``K``, ``damping`` (ndof, ndof), ``A`` (2 ndof, 2 ndof),
+        ``B`` (2 ndof, nv), ``C`` (ndof, 2 ndof), ``D`` (ndof, nv), ``freq_hz`` (nx,) — each
+        with a leading (ns,) axis for several poses — plus the coordinate names
+        ``coordinates`` (ndof,), ``states`` (2 ndof,), ``inputs`` (nv,), ``outputs`` (ndof,)
+        and ``q``, ``y``.
+    """
+    if not np.isfinite(zeta) or zeta < 0.0:
+        raise ConfigurationError(f"zeta = {zeta!r} must be a finite number >= 0")
+    if rayleigh is not None and (np.shape(rayleigh) != (2,) or min(rayleigh) < 0.0):
+        raise ConfigurationError("rayleigh must be (alpha, beta) with both >= 0")
+    Q = arm.check_q(q)
+    yv = arm.check_y(y)
+    poses = [_one_pose(arm, qk, yv, zeta, rayleigh) for qk in np.atleast_2d(Q)]
+    out = {k: (poses[0][k] if Q.ndim == 1 else np.stack([p[k] for p in poses]))
+           for k in poses[0]}
+    coords = list(arm.x_names) + list(arm.joint_names)
+    out.update(
+        coordinates=np.array(coords),
+        states=np.array(coords + [f"d({c})/dt" for c in coords]),
+        inputs=np.array([f"tau({n})" for n in arm.joint_names]),
+        outputs=np.array(coords),
+        q=np.asarray(Q),
+        y=np.asarray(yv),
+        design_names=np.array(arm.design_names),
+        zeta=np.array(float(zeta)),
+        rayleigh=np.array(rayleigh if rayleigh is not None else (0.0, 0.0), dtype=float),
+    )
+    return out
+
+
+def save_linear_model(data: dict, path: str | Path) -> Path:
+    """Write :func:`linear_model` output to ``.npz`` (NumPy) or ``.mat`` (MATLAB, scipy.io).
+
+    In the ``.mat`` file string arrays become char/cell arrays; the leading sample axis of
+    several poses stays the first axis.
+    """
+    path = Path(path)
+    if path.suffix == ".npz":
+        np.savez(path, **data)
+    elif path.suffix == ".mat":
+        import scipy.io
+
+        scipy.io.savemat(path, {k: (v.tolist() if v.dtype.kind == "U" else v)
+                                for k, v in ((k, np.asarray(v)) for k, v in data.items())})
+    else:
+        raise ConfigurationError(f"'{path.name}': export to .npz or .mat")
+    return path
