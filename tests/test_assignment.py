@@ -167,4 +167,8 @@ def test_cli_assign_json(tmp_path, capsys):
     for key in ("qp_iterations", "qp_time_s", "total_time_s"):
         assert key in out
     assert (tmp_path / "charts" / "mode1_assignment.png").stat().st_size > 10_000
-    assert (tmp_path / "charts" / "higher_modes.png").is_file()
+    assert (tmp_path / "charts" / "other_modes.png").is_file()
+    # per-sample frequencies and the constraint report come with the summary
+    assert out["modes"][0]["mode"] == 1 and len(out["modes"][0]["after_hz"]) == 152
+    assert out["active_constraints"] == [] or isinstance(out["active_constraints"], list)
+    assert (tmp_path / "charts" / "assignment.csv").is_file()

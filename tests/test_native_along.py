@@ -142,3 +142,26 @@ def test_cli_modes_along_json(tmp_path, arm, capsys):
     np.testing.assert_allclose(np.sort(data["frequencies_hz"], axis=1),
                                arm.frequencies(q)[:, :2], rtol=1e-10)
     assert main(["modes", str(robot), "--csv", "x.csv"]) == 2
+
+
+def test_study_path_table(tmp_path, arm):
+    """A TOML study's [trajectory.path] gives the same trajectory as the Python call."""
+    from pinflex.assignment.study import load_config
+
+    robot = tmp_path / "ur10_flexible.xml"
+    robot.write_text(OVERLAY)
+    cfg = tmp_path / "study.toml"
+    cfg.write_text(
+        'robot = "ur10_flexible.xml"\n[trajectory.path]\nframe = "ee_link"\n'
+        "waypoints = [[0, 0.3, -0.1], [-0.2, 0.3, 0.0]]\nrelative = true\n"
+        f"start_q = {Q0.tolist()}\nsamples = 8\nduration_s = 1.5\norientation = \"keep\"\n"
+        "[[targets]]\nmode = 1\nfreq_hz = 150.0\n"
+    )
+    study = load_config(cfg)
+    model = study.build_model()
+    traj = study.build_trajectory(model)
+    p0 = frame_position(arm, "ee_link", Q0)
+    ref = path_trajectory(arm, "ee_link", [p0, p0 + [0, 0.3, -0.1], p0 + [-0.2, 0.3, 0]],
+                          n_samples=8, duration_s=1.5, q_init=Q0, orientation="keep")
+    np.testing.assert_allclose(traj.q, ref.q, atol=1e-12)
+    np.testing.assert_allclose(traj.times_s, ref.times_s)

@@ -1,4 +1,10 @@
-"""PNG charts of assignments and Taylor models (matplotlib, Agg backend, no window)."""
+"""PNG charts of assignments (matplotlib's object API, no pyplot state, no window).
+
+Each target mode gets a chart of its frequency before, predicted and exact after, with the
+target; the other reported modes (floors, bands, reported modes) share one chart with a panel
+per mode, each drawing its floor (a line and a shaded region below it) and its forbidden band
+(a shaded band).
+"""
 
 from __future__ import annotations
 
@@ -7,68 +13,93 @@ from pathlib import Path
 import numpy as np
 
 
-def _plt():
-    import matplotlib
+def _figure(width: float, height: float):
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return Figure(figsize=(width, height), dpi=120)
 
 
-def assignment_charts(result, times_s: np.ndarray, out_dir: str | Path) -> list[Path]:
-    """Write mode 1 before/after with its target, and modes 2–4 before/after (paper Fig. 4–5).
+def _constraints_of(result, mode: int, ax) -> None:
+    settings = result.settings or {}
+    for m, f in settings.get("floors", []):
+        if m == mode:
+            ax.axhline(f, color="C3", lw=1.2, ls="-", label=f"floor {f:g} Hz")
+            ax.axhspan(ax.get_ylim()[0] if ax.get_ylim()[0] < f else f - 1.0, f,
+                       color="C3", alpha=0.08)
+    for m, a, b in settings.get("bands", []):
+        if m == mode:
+            ax.axhspan(a, b, color="C1", alpha=0.18, label=f"forbidden band {a:g}–{b:g} Hz")
+
+
+def assignment_charts(result, times_s: np.ndarray, out_dir: str | Path, data=None) -> list[Path]:
+    """Write the target modes' charts and one chart of the other modes (paper Fig. 4–5).
 
     Args:
         result: An :class:`pinflex.assignment.AssignmentResult`.
         times_s: Trajectory times [s], (ns,).
         out_dir: Folder for the PNG files (created).
+        data: Its :class:`pinflex.assignment.report.AssignmentData` (adds the Taylor
+            prediction after and the floor/band modes); optional.
 
     Returns:
-        Paths of the files written.
+        Paths of the files written: ``mode<m>_assignment.png`` per target mode, and
+        ``other_modes.png`` when modes other than the targets are reported.
     """
-    plt = _plt()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    modes = list(result.modes)
-    target_modes = [m for m in modes[: result.targets_hz.shape[0]]]
+    n_targets = result.targets_hz.shape[0]
+    target_modes = list(result.modes[:n_targets])
+    if data is not None:
+        modes = list(data.modes)
+        before, after, predicted = data.before_hz, data.after_hz, data.predicted_hz
+    else:
+        modes = list(result.modes)
+        before, after = result.freq_before_hz, result.freq_after_hz
+        predicted = np.full_like(after, np.nan)
     design = ", ".join(f"{k} = {v:.4f} kg" for k, v in result.design.items())
     for k, mode in enumerate(target_modes):
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig = _figure(7, 4)
+        ax = fig.add_subplot()
         col = modes.index(mode)
-        ax.plot(times_s, result.freq_before_hz[:, col], label="original design", color="0.4")
-        ax.plot(times_s, result.freq_after_hz[:, col], label=f"assigned ({design})", color="C0")
+        ax.plot(times_s, before[:, col], label="before (exact)", color="0.4")
+        if np.all(np.isfinite(predicted[:, col])):
+            ax.plot(times_s, predicted[:, col], ":", label="after, predicted (Taylor)",
+                    color="C2")
+        ax.plot(times_s, after[:, col], label=f"after, exact ({design})", color="C0")
         ax.plot(times_s, result.targets_hz[k], "--", label="target", color="C3")
+        _constraints_of(result, mode, ax)
         ax.set_xlabel("time [s]")
         ax.set_ylabel(f"mode {mode} frequency [Hz]")
         ax.set_title(
-            f"Mode {mode} along the trajectory: max error {100 * result.max_error_before:.2f} % "
-            f"→ {100 * result.max_error_after:.2f} % (exact model)"
+            f"Mode {mode}: max target error {100 * result.max_error_before:.2f} % → "
+            f"{100 * result.max_error_after:.2f} % (exact model)", fontsize=10,
         )
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7)
         fig.tight_layout()
         path = out / f"mode{mode}_assignment.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
+        fig.savefig(path)
         written.append(path)
-    others = [m for m in modes if m not in target_modes]
+    others = sorted(m for m in modes if m not in target_modes)
     if others:
-        fig, axes = plt.subplots(len(others), 1, figsize=(7, 2.4 * len(others)), sharex=True)
-        axes = np.atleast_1d(axes)
+        fig = _figure(7, 2.4 * len(others) + 0.6)
+        axes = fig.subplots(len(others), 1, sharex=True, squeeze=False)[:, 0]
         for ax, mode in zip(axes, others):
             col = modes.index(mode)
-            ax.plot(times_s, result.freq_before_hz[:, col], color="0.4", label="original")
-            ax.plot(times_s, result.freq_after_hz[:, col], color="C0", label="assigned")
+            ax.plot(times_s, before[:, col], color="0.4", label="before (exact)")
+            if np.all(np.isfinite(predicted[:, col])):
+                ax.plot(times_s, predicted[:, col], ":", color="C2", label="after, predicted")
+            ax.plot(times_s, after[:, col], color="C0", label="after (exact)")
+            _constraints_of(result, mode, ax)
             ax.set_ylabel(f"mode {mode} [Hz]")
             ax.grid(alpha=0.3)
-        axes[0].legend(fontsize=8)
+            ax.legend(fontsize=7, loc="best")
         axes[-1].set_xlabel("time [s]")
-        fig.suptitle("Higher modes before and after the assignment (exact model)")
+        fig.suptitle(f"Modes {', '.join(map(str, others))} before and after the assignment",
+                     fontsize=10)
         fig.tight_layout()
-        path = out / "higher_modes.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
+        path = out / "other_modes.png"
+        fig.savefig(path)
         written.append(path)
     return written

@@ -67,6 +67,9 @@ class AssignmentResult:
         taylor: The Taylor model the last QP was built from.
         refinements: Re-expansions accepted by the sequential refinement.
         timings_s: Compute time of each stage [s].
+        settings: The constraints the problem was built with: ``mass_budget_kg``,
+            ``floors`` ``[(mode, f_min_hz)]``, ``bands`` ``[(mode, a_hz, b_hz)]``,
+            ``quantity`` (see :mod:`pinflex.assignment.report`).
     """
 
     found: bool
@@ -85,6 +88,7 @@ class AssignmentResult:
     taylor: TaylorModel
     refinements: int = 0
     timings_s: dict[str, float] = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
 
 
 def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
@@ -321,6 +325,12 @@ def assign_frequencies(
         taylor=taylor,
         refinements=refinements,
         timings_s=timings,
+        settings={
+            "mass_budget_kg": build_kwargs.get("mass_budget_kg"),
+            "floors": [(int(m), float(f)) for m, f in build_kwargs.get("floors", ())],
+            "bands": [(int(m), float(a), float(b)) for m, a, b in build_kwargs.get("bands", ())],
+            "quantity": build_kwargs.get("quantity", "freq_hz"),
+        },
     )
 
 

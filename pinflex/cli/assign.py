@@ -11,8 +11,15 @@ def add_parser(sub) -> None:
     """Register the ``assign`` subcommand on an ``argparse`` subparsers object."""
     p = sub.add_parser("assign", help="assign eigenfrequencies along a trajectory (TOML study)")
     p.add_argument("config", help="TOML study file (see pinflex.assignment.study)")
-    p.add_argument("--out", default=None, help="folder for the charts (default: none)")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--out", default=None,
+                   help="folder for the charts, assignment.csv and assignment.json")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object (design, errors, per-sample frequencies, "
+                   "constraints)")
+    p.add_argument("--csv", default=None, metavar="FILE",
+                   help="per sample and mode: target, before, predicted, exact after")
+    p.add_argument("--parquet", default=None, metavar="FILE",
+                   help="the same table as Parquet (needs pyarrow)")
     p.add_argument("--html", default=None, metavar="FILE", help="write an HTML preview")
     p.set_defaults(func=cmd_assign)
 
@@ -43,20 +50,32 @@ def write_preview(model, traj, result, path) -> str | None:
 
 def cmd_assign(args: argparse.Namespace) -> int:
     """Run ``pinflex assign``."""
+    from pathlib import Path
+
     from pinflex.assignment.charts import assignment_charts
+    from pinflex.assignment.report import assignment_data
     from pinflex.assignment.study import load_config, run_config
 
     t0 = time.perf_counter()
     cfg = load_config(args.config)
     model, traj, result = run_config(cfg)
     total = time.perf_counter() - t0
-    charts = []
+    data = assignment_data(model, traj, result)
+    charts, files = [], []
     if args.out:
-        charts = [str(p) for p in assignment_charts(result, traj.times_s, args.out)]
+        charts = [str(p) for p in assignment_charts(result, traj.times_s, args.out, data)]
+        files = [str(data.to_csv(Path(args.out) / "assignment.csv")),
+                 str(data.to_json(Path(args.out) / "assignment.json"))]
+    if args.csv:
+        files.append(str(data.to_csv(args.csv)))
+    if args.parquet:
+        files.append(str(data.to_parquet(args.parquet)))
     html = write_preview(model, traj, result, args.html) if args.html else None
     out = summary(result, total)
     out["charts"] = charts
+    out["files"] = files
     out["html"] = html
+    out.update(data.to_dict())
     if args.json:
         print(json.dumps(out))
         return 0
@@ -66,7 +85,11 @@ def cmd_assign(args: argparse.Namespace) -> int:
           f"(predicted {100 * result.predicted_max_error_after:.2f} %)")
     print(f"QP: {result.solution.iterations} iterations, {1e3 * result.solution.time_s:.3f} ms; "
           f"total {total:.3f} s")
-    for c in charts:
+    active = data.active
+    print(f"active constraints: {', '.join(active) if active else 'none'}")
+    for line in data.constraint_lines():
+        print(f"  {line}")
+    for c in charts + files:
         print(f"wrote {c}")
     if html:
         print(f"wrote {html}")
