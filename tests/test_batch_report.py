@@ -78,3 +78,51 @@ def test_missing_store_is_an_error(tmp_path):
     """Reporting on a file that does not exist raises StoreError."""
     with pytest.raises(StoreError, match="no store"):
         build_report(tmp_path / "none.db")
+
+
+def test_case_table_has_case_parameters_as_columns(tmp_path, capsys):
+    """`batch report` writes one row per assignment case with the swept keys as columns."""
+    import csv
+
+    from pinflex.batch.report import case_table
+
+    path = tmp_path / "sweep.db"
+    rows = []
+    for case, (f, b) in enumerate([(185.0, 0.2), (185.0, -0.1), (190.0, 0.2)]):
+        ok = b > 0
+        rows.append({
+            "seed": 0, "item": 0, "config_hash": f"h{case}", "kind": "assign",
+            "status": "ok" if ok else "failed",
+            "error": None if ok else "assign: AssignmentInfeasible: budget below zero",
+            "params": {"case": case, "overrides": {"targets.0.freq_hz": f,
+                                                   "constraints.mass_budget_kg": b}},
+            "result": {"design": {"m1": 0.1 + case / 100, "m2": 0.05},
+                       "max_error_before": 0.0831, "max_error_after": 0.01 * (case + 1),
+                       "predicted_max_error_after": 0.009, "iterations": 7} if ok else None,
+            "metrics": {"error_after": 0.01 * (case + 1)} if ok else {},
+            "timings": {"task_s": 1.5},
+        })
+    with ResultStore(path) as s:
+        for r in rows:
+            s.add_config(r["config_hash"], "assign", {"study_file": "a.toml",
+                                                      "study_sha256": "x"})
+        s.write(rows)
+    table = case_table(path)
+    assert table.columns[0] == "case" and table.columns[3] == "status"
+    assert set(table.columns[1:3]) == {"targets.0.freq_hz", "constraints.mass_budget_kg"}
+    assert [r[0] for r in table.rows] == [0, 1, 2]
+    col = {c: i for i, c in enumerate(table.columns)}
+    assert [table.rows[2][col[c]] for c in ("targets.0.freq_hz", "constraints.mass_budget_kg",
+                                           "status")] == [190.0, 0.2, "ok"]
+    assert table.rows[2][table.columns.index("m1_kg")] == pytest.approx(0.12)
+    assert table.rows[2][table.columns.index("total_kg")] == pytest.approx(0.17)
+    assert table.rows[2][table.columns.index("error_after_%")] == pytest.approx(3.0)
+    assert table.rows[1][table.columns.index("m1_kg")] is None
+    assert main(["batch", "report", str(path), "--no-plots",
+                 "--table", str(tmp_path / "cases.csv")]) == 0
+    text = capsys.readouterr().out
+    assert "targets.0.freq_hz" in text and "AssignmentInfeasible" in text
+    with open(tmp_path / "cases.csv") as fh:
+        got = list(csv.DictReader(fh))
+    assert len(got) == 3 and got[0]["constraints.mass_budget_kg"] == "0.2"
+    assert got[1]["m1_kg"] == "" and got[1]["status"] == "failed"

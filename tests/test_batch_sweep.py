@@ -101,3 +101,31 @@ def test_budget_holds_and_an_infeasible_case_is_recorded():
     assert rows[1]["status"] == "failed"
     assert rows[1]["error"].startswith("assign: AssignmentInfeasible:")
     assert rows[1]["params"] == {"case": 1, "overrides": {"constraints.mass_budget_kg": -0.1}}
+
+
+def test_cases_sharing_an_expansion_equal_cases_run_alone():
+    """3 targets x 2 budgets: one group; every row equals the case solved on its own."""
+    from pinflex.batch.sweep import expansion_key, run_assign_group
+
+    sweeps = parse_sweeps(["targets.0.freq_hz=185,190,195",
+                           "constraints.mass_budget_kg=0.15,-0.1"])
+    cases = plan_cases(STUDY, sweeps)
+    assert len({expansion_key(cfg) for _, _, cfg, _ in cases}) == 1
+    other = plan_cases(STUDY, parse_sweeps(["expansion.order=2,4"]))
+    assert len({expansion_key(cfg) for _, _, cfg, _ in other}) == 2
+    items = [(cfg, ov, h, i) for i, (h, _, cfg, ov) in enumerate(cases)]
+    shared = run_assign_group(items)
+    assert [r["config_hash"] for r in shared] == [h for h, *_ in cases]
+    for (cfg, ov, h, i), row in zip(items, shared):
+        (alone,) = run_assign_case(cfg, ov, h, i)
+        assert row["status"] == alone["status"]
+        if alone["status"] == "ok":
+            np.testing.assert_allclose(row["result"]["y"], alone["result"]["y"], atol=1e-9)
+            assert row["metrics"]["error_after"] == pytest.approx(
+                alone["metrics"]["error_after"], rel=1e-9)
+            assert row["metrics"]["error_before"] == pytest.approx(
+                alone["metrics"]["error_before"], rel=1e-12)
+            assert row["timings"]["shared_by"] == 6.0
+        else:
+            assert row["error"] == alone["error"]
+    assert sum(r["status"] == "failed" for r in shared) == 3  # the negative budgets

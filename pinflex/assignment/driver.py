@@ -239,6 +239,7 @@ def assign_frequencies(
     refine: bool = False,
     max_refinements: int = 5,
     report_modes: Sequence[int] = (),
+    freq_before_hz: np.ndarray | None = None,
     **build_kwargs,
 ) -> AssignmentResult:
     """Solve the assignment QP with ProxQP and verify it with the exact model.
@@ -252,6 +253,9 @@ def assign_frequencies(
         refine: Re-expand at each new design and re-solve while the exact error improves.
         max_refinements: Most re-expansions.
         report_modes: Extra modes whose frequencies are reported (e.g. 2, 3, 4).
+        freq_before_hz: Exact frequencies of ``y_before`` along the trajectory, (ns, modes)
+            with the modes in the result's order (targets, then ``report_modes``), when the
+            caller already has them (sweeps share them between cases).
         **build_kwargs: Passed to :func:`build_assignment`.
 
     Raises:
@@ -269,7 +273,17 @@ def assign_frequencies(
         if m not in modes:
             modes.append(int(m))
     t0 = time.perf_counter()
-    f_before, err_before = exact_errors(model, Q, y_before, targets, modes)
+    if freq_before_hz is None:
+        f_before, err_before = exact_errors(model, Q, y_before, targets, modes)
+    else:
+        f_before = np.asarray(freq_before_hz, dtype=float)
+        if f_before.shape != (Q.shape[0], len(modes)):
+            raise ConfigurationError(
+                f"freq_before_hz has shape {f_before.shape}; expected {(Q.shape[0], len(modes))}"
+            )
+        cols = [modes.index(t.mode) for t in targets]
+        err_before = float(np.abs(f_before[:, cols].T / target_matrix(targets, Q.shape[0])
+                                  - 1.0).max())
     timings["exact_before"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -175,18 +175,28 @@ def load_config(path: str | Path) -> AssignmentConfig:
     )
 
 
-def run_config(cfg: AssignmentConfig):
+def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=None,
+               freq_before_hz=None):
     """Build the model and trajectory of a study and solve it.
+
+    Args:
+        cfg: The study.
+        model: Reuse this model (built from the same robot and ``planar``) instead of loading.
+        trajectory: Reuse this trajectory of the study.
+        taylor: Reuse this Taylor model (same q0, y0, order and design; it must carry every
+            mode the targets, floors and bands name), skipping the expansion.
+        freq_before_hz: Reuse the exact frequencies before (see
+            :func:`~pinflex.assignment.driver.assign_frequencies`).
 
     Returns:
         ``(model, trajectory, result)``.
     """
-    model = cfg.build_model()
-    traj = cfg.build_trajectory(model)
+    model = cfg.build_model() if model is None else model
+    traj = cfg.build_trajectory(model) if trajectory is None else trajectory
     baseline = model.check_y(cfg.baseline) if cfg.baseline is not None else None
     result = assign_frequencies(
         model, traj, cfg.targets,
-        y_before=baseline, refine=cfg.refine,
+        y_before=baseline, refine=cfg.refine, taylor=taylor, freq_before_hz=freq_before_hz,
         report_modes=[m for m in cfg.report_modes if m <= model.nx],
         q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
         order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,

@@ -9,6 +9,7 @@ with a few example keys. Histograms of log10 of each error are written as PNG.
 
 from __future__ import annotations
 
+import re
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -197,9 +198,100 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
             ax.set_title(f"{name}\n{positive.size} rows", fontsize=8)
             ax.legend(fontsize=8)
             fig.tight_layout()
-            safe = key.replace(":", "-")
+            safe = re.sub(r"[^A-Za-z0-9._-]+", "-", name.split(" [")[0]).strip("-")
             file = out / f"{index:02d}_{safe}_{metric}.png"
             fig.savefig(file, dpi=110)
             plt.close(fig)
             written.append(file)
     return written
+
+
+@dataclass
+class CaseTable:
+    """One row per assignment case of a store, the case parameters as columns.
+
+    Attributes:
+        columns: Column names: ``case``, one per swept key (its dotted study key), ``status``,
+            the design variables [kg], ``total_kg``, ``error_before_%``, ``error_after_%``,
+            ``predicted_after_%``, ``qp_iterations``, ``time_s``, ``error``.
+        rows: Values, one list per case, ordered by case index.
+    """
+
+    columns: list[str]
+    rows: list[list]
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write the table as CSV (empty cells for missing values)."""
+        import csv
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(self.columns)
+            for r in self.rows:
+                w.writerow(["" if v is None else v for v in r])
+        return path
+
+    def text(self, max_error_chars: int = 40) -> str:
+        """An aligned terminal table."""
+        def fmt(v):
+            if v is None:
+                return "-"
+            if isinstance(v, float):
+                return f"{v:.4g}"
+            s = str(v)
+            return s if len(s) <= max_error_chars else s[: max_error_chars - 3] + "..."
+
+        cells = [[fmt(v) for v in r] for r in self.rows]
+        widths = [max([len(c)] + [len(r[i]) for r in cells]) for i, c in enumerate(self.columns)]
+        line = "  ".join(c.rjust(w) for c, w in zip(self.columns, widths))
+        out = [line, "  ".join("-" * w for w in widths)]
+        out += ["  ".join(v.rjust(w) for v, w in zip(r, widths)) for r in cells]
+        return "\n".join(out)
+
+
+def case_table(path: str | Path) -> CaseTable:
+    """The per-case table of the assignment rows of a store (empty without any).
+
+    Raises:
+        StoreError: If the file does not exist or is not a store.
+    """
+    if not Path(path).is_file():
+        raise StoreError(f"no store at '{path}'; pass the --store file of a batch run")
+    with ResultStore(path) as store:
+        rows = list(store.rows(kind="assign"))
+    rows.sort(key=lambda r: int((r.params or {}).get("case", r.item)))
+    keys: list[str] = []
+    design: list[str] = []
+    for r in rows:
+        for k in ((r.params or {}).get("overrides") or {}):
+            if k not in keys:
+                keys.append(k)
+        for k in ((r.result or {}).get("design") or {}):
+            if k not in design:
+                design.append(k)
+    columns = (["case"] + keys + ["status"] + [f"{d}_kg" for d in design]
+               + ["total_kg", "error_before_%", "error_after_%", "predicted_after_%",
+                  "qp_iterations", "time_s", "error"])
+    table = []
+    for r in rows:
+        params = r.params or {}
+        over = params.get("overrides") or {}
+        res = r.result or {}
+        des = res.get("design") or {}
+
+        def pct(v):
+            return None if v is None else 100.0 * float(v)
+
+        table.append(
+            [int(params.get("case", r.item))]
+            + [over.get(k) for k in keys]
+            + [r.status]
+            + [des.get(d) for d in design]
+            + [float(sum(des.values())) if des else None,
+               pct(res.get("max_error_before")), pct(res.get("max_error_after")),
+               pct(res.get("predicted_max_error_after")), res.get("iterations"),
+               (r.timings or {}).get("task_s"), r.error]
+        )
+    return CaseTable(columns, table)

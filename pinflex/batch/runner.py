@@ -321,6 +321,12 @@ def _add_stages(acc: dict[str, float], rows: list[dict]) -> None:
     """Accumulate per-task stage times: shared stages once, per-row stages summed."""
     if not rows:
         return
+    if "shared_by" in rows[0]["timings"]:  # assignment cases sharing one expansion
+        for name in ("task_s", "task_cpu_s", "shared_setup_s", "qp", "exact_verification"):
+            values = [r["timings"][name] for r in rows if name in r["timings"]]
+            if values:
+                acc[name] = acc.get(name, 0.0) + float(sum(values))
+        return
     for name in ("beam_s", "truth_s", "truth_cpu_s", "task_s", "task_cpu_s"):
         if name in rows[0]["timings"]:
             acc[name] = acc.get(name, 0.0) + float(rows[0]["timings"][name])
@@ -386,12 +392,13 @@ def run_assign(config_path: str | Path, sweeps: list[tuple[str, list]],
     Returns:
         The run's summary.
     """
-    from pinflex.batch.sweep import KIND, plan_cases, run_assign_case
+    from pinflex.batch.sweep import KIND, expansion_key, plan_cases, run_assign_group
 
     cases = plan_cases(config_path, sweeps)
     with ResultStore(store_path) as store:
         done = store.finished_keys(include_failed=not retry_failed)
-        tasks, skipped, seen = [], 0, set()
+        groups: dict[str, list] = {}
+        skipped, seen = 0, set()
         for index, (chash, config, cfg, overrides) in enumerate(cases):
             store.add_config(chash, KIND, config)
             key = (0, 0, chash)
@@ -399,9 +406,15 @@ def run_assign(config_path: str | Path, sweeps: list[tuple[str, list]],
                 skipped += key in done
                 continue
             seen.add(key)
-            tasks.append(Task(name=f"assign-{index}", keys=(key,), func=run_assign_case,
-                              args=(cfg, overrides, chash, index), kind=KIND,
-                              params={"case": index, "overrides": overrides}))
+            # cases that differ only in targets, budgets, floors, bands or baseline share one
+            # Taylor expansion: one task per group
+            groups.setdefault(expansion_key(cfg), []).append((cfg, overrides, chash, index))
+        tasks = [
+            Task(name=f"assign-{items[0][3]}", keys=tuple((0, 0, it[2]) for it in items),
+                 func=run_assign_group, args=(items,), kind=KIND,
+                 params={"cases": [it[3] for it in items]})
+            for items in groups.values()
+        ]
         return run_tasks(store, tasks, len(cases), skipped, scheduler, workers, retry_failed,
-                         progress, label="cases",
+                         progress, label="expansion groups",
                          preload=("pinflex.assignment.study", "pinflex.assignment"))

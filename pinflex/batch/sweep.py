@@ -30,6 +30,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import itertools
+import json
 import re
 import time
 import tomllib
@@ -230,24 +231,42 @@ def plan_cases(config_path: str | Path, sweeps: list[tuple[str, list]]):
     return out
 
 
-def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
-    """Solve one assignment case and verify it with the exact model (runs on a worker).
+def expansion_key(cfg) -> str:
+    """What a case's Taylor expansion depends on: cases with equal keys can share one.
 
-    The key is (seed 0, item 0, config_hash): a case is identified by its configuration only.
-
-    Returns:
-        A one-element list with the row; failures are recorded, never raised.
+    Robot, planar switch, trajectory, expansion point, order and quantity; not the targets,
+    weights, budget, floor and band values, baseline or reported modes (the shared expansion
+    carries the union of the modes the cases need).
     """
-    from pinflex.assignment.study import run_config
+    return json.dumps({
+        "robot": str(cfg.robot), "planar": bool(cfg.planar), "trajectory": cfg.trajectory,
+        "q0": None if cfg.q0 is None else np.asarray(cfg.q0, dtype=float).tolist(),
+        "y0": None if cfg.y0 is None else {k: float(v) for k, v in sorted(cfg.y0.items())},
+        "order": int(cfg.order), "quantity": str(cfg.quantity),
+    }, sort_keys=True)
 
-    t0, c0 = time.perf_counter(), time.process_time()
-    row = {"seed": 0, "item": 0, "config_hash": chash, "kind": KIND, "status": "failed",
-           "error": None, "params": {"case": case, "overrides": overrides}, "truth": None,
-           "result": None, "metrics": {}, "worker": _worker_address()}
+
+def _needed_modes(cfg) -> list[int]:
+    out: list[int] = []
+    for m in ([t.mode for t in cfg.targets] + [f[0] for f in cfg.floors]
+              + [b[0] for b in cfg.bands]):
+        if int(m) not in out:
+            out.append(int(m))
+    return out
+
+
+def _new_row(chash: str, case: int, overrides: dict) -> dict:
+    return {"seed": 0, "item": 0, "config_hash": chash, "kind": KIND, "status": "failed",
+            "error": None, "params": {"case": case, "overrides": overrides}, "truth": None,
+            "result": None, "metrics": {}, "worker": _worker_address()}
+
+
+def _fill_row(row: dict, solve) -> None:
+    """Run ``solve() -> (model, trajectory, result)`` and record it in ``row``."""
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            _, _, result = run_config(cfg)
+            _, _, result = solve()
         row["truth"] = {"modes": list(result.modes),
                         "freq_before_hz_range": [result.freq_before_hz.min(axis=0).tolist(),
                                                  result.freq_before_hz.max(axis=0).tolist()],
@@ -273,6 +292,119 @@ def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
     except Exception as exc:  # noqa: BLE001 - recorded in the row, never re-raised
         row["error"] = _error_text("assign", exc)
         row["timings"] = {}
+
+
+def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
+    """Solve one assignment case and verify it with the exact model (runs on a worker).
+
+    The key is (seed 0, item 0, config_hash): a case is identified by its configuration only.
+
+    Returns:
+        A one-element list with the row; failures are recorded, never raised.
+    """
+    from pinflex.assignment.study import run_config
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    row = _new_row(chash, case, overrides)
+    _fill_row(row, lambda: run_config(cfg))
     row["timings"]["task_s"] = time.perf_counter() - t0
     row["timings"]["task_cpu_s"] = time.process_time() - c0
     return [row]
+
+
+class _TrajectoryFrequencies:
+    """``model.frequencies`` that reuses one assembly on a fixed set of poses.
+
+    ``M(q, y) = M0(q) + Σ_j y_j Md_j(q)``: the pose-dependent parts (Pinocchio Jacobians,
+    beam and inertia assembly) are computed once for the group's trajectory; a call on those
+    poses only adds the design masses and solves the eigenproblems. Calls on other poses, or
+    with one design per pose, go to the model's own method. The numbers are the same as the
+    model's (same assembly, same sum).
+    """
+
+    def __init__(self, model, Q: np.ndarray):
+        from pinflex.erls import BatchAlgebra
+
+        self.model, self.Q = model, np.array(Q, dtype=float)
+        self.M0, self.Md, self.K = model.assemble(model.pose_terms(self.Q),
+                                                  BatchAlgebra(self.Q.shape[0]))
+        self.own = model.frequencies
+
+    def __call__(self, Q, y=None, *, n_modes=None, check_bounds=True):
+        from pinflex.erls.model import add_design_masses
+
+        Qa = np.asarray(Q, dtype=float)
+        yv = self.model.check_y(y, bounds=check_bounds)
+        if Qa.shape != self.Q.shape or yv.ndim != 1 or not np.array_equal(Qa, self.Q):
+            return self.own(Q, y, n_modes=n_modes, check_bounds=check_bounds)
+        lam = self.model.eigvals_from(add_design_masses(self.M0, self.Md, yv), self.K)
+        if n_modes is not None:
+            lam = lam[..., :n_modes]
+        return np.sqrt(lam) / (2.0 * np.pi)
+
+
+def run_assign_group(items: list) -> list[dict]:
+    """Solve cases that share one expansion (equal :func:`expansion_key`) on one worker.
+
+    The model, the trajectory, the Taylor expansion (with the union of the modes the cases
+    need), the pose-dependent assembly of the exact model on the trajectory and the exact
+    frequencies before (per baseline) are computed once; each case then builds and solves its
+    QP and verifies its design with the exact model (design masses added to the shared
+    assembly, eigenproblems solved). If the shared set-up
+    fails, every case runs on its own (and records its own error).
+
+    Args:
+        items: ``(assignment_config, overrides, config_hash, case_index)`` per case.
+
+    Returns:
+        One row per case; the shared set-up time is split evenly over the rows
+        (``timings["shared_setup_s"]``, ``timings["shared_by"]``).
+    """
+    from pinflex.assignment.study import run_config
+    from pinflex.parametric import expand
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    cfg0 = items[0][0]
+    try:
+        model = cfg0.build_model()
+        traj = cfg0.build_trajectory(model)
+        Q = model.check_q(traj.q)
+        q0 = Q[Q.shape[0] // 2] if cfg0.q0 is None else cfg0.q0
+        y0 = model.check_y(cfg0.y0)
+        modes: list[int] = []
+        for cfg, *_ in items:
+            modes += [m for m in _needed_modes(cfg) if m not in modes]
+        taylor = expand(model, q0, y0, order=cfg0.order, modes=modes)
+        # this worker-local model verifies every case on the same poses: assemble them once
+        model.frequencies = _TrajectoryFrequencies(model, Q)
+    except Exception:  # noqa: BLE001 - each case then reports its own error
+        return [row for cfg, ov, h, case in items for row in run_assign_case(cfg, ov, h, case)]
+    shared_s, shared_cpu = time.perf_counter() - t0, time.process_time() - c0
+    before: dict = {}
+    rows = []
+    for cfg, overrides, chash, case in items:
+        t1, c1 = time.perf_counter(), time.process_time()
+        row = _new_row(chash, case, overrides)
+
+        def solve(cfg=cfg):
+            y_before = (model.check_y(cfg.baseline) if cfg.baseline is not None
+                        else np.array([d.lower for d in model.design]))
+            case_modes: list[int] = []
+            report = [m for m in cfg.report_modes if m <= model.nx]
+            for m in [t.mode for t in cfg.targets] + report:
+                if int(m) not in case_modes:
+                    case_modes.append(int(m))
+            key = (tuple(np.asarray(y_before, dtype=float).tolist()), tuple(case_modes))
+            if key not in before:
+                f = model.frequencies(Q, y_before, n_modes=max(case_modes))
+                before[key] = f[:, [m - 1 for m in case_modes]]
+            return run_config(cfg, model=model, trajectory=traj, taylor=taylor,
+                              freq_before_hz=before[key])
+
+        _fill_row(row, solve)
+        row["timings"]["shared_setup_s"] = shared_s / len(items)
+        row["timings"]["shared_by"] = float(len(items))
+        row["timings"]["task_s"] = time.perf_counter() - t1 + shared_s / len(items)
+        row["timings"]["task_cpu_s"] = time.process_time() - c1 + shared_cpu / len(items)
+        rows.append(row)
+    return rows

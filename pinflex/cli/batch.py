@@ -65,6 +65,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="folder for the histogram PNGs (default: STORE's name + '-report')")
     r.add_argument("--no-plots", action="store_true", help="print only, write no PNG")
     r.add_argument("--json", action="store_true", help="print one JSON object")
+    r.add_argument("--table", default=None, metavar="CSV",
+                   help="per-case table of assignment sweeps (default: cases.csv in the "
+                   "report folder)")
     r.set_defaults(func=cmd_report)
     return batch
 
@@ -120,14 +123,28 @@ def cmd_assign(args: argparse.Namespace) -> int:
 
 def cmd_report(args: argparse.Namespace) -> int:
     """Run ``pinflex batch report``."""
-    from pinflex.batch.report import build_report, write_histograms
+    from pathlib import Path
+
+    from pinflex.batch.report import build_report, case_table, write_histograms
 
     report = build_report(args.store)
     pngs = [] if args.no_plots else write_histograms(args.store, args.out)
+    cases = case_table(args.store)
+    table_path = None
+    if cases.rows:
+        store = Path(args.store)
+        default = (Path(args.out) if args.out else store.with_name(store.stem + "-report"))
+        table_path = cases.to_csv(args.table or default / "cases.csv")
     if args.json:
-        print(json.dumps(dict(report.to_dict(), histograms=[str(p) for p in pngs])))
+        print(json.dumps(dict(report.to_dict(), histograms=[str(p) for p in pngs],
+                              cases={"columns": cases.columns, "rows": cases.rows},
+                              table=str(table_path) if table_path else None)))
         return 0
     print(report.text())
+    if cases.rows:
+        print("")
+        print(cases.text())
+        print(f"wrote {table_path}")
     for path in pngs:
         print(f"wrote {path}")
     return 0
