@@ -105,11 +105,17 @@ class TaylorRadiusExceeded(PinflexError):
 
 
 class AssignmentInfeasible(PinflexError):
-    """The assignment QP has no feasible point (or the solver failed)."""
+    """The assignment QP has no feasible point (or the solver failed).
 
-    def __init__(self, message: str, problem=None, result=None):
+    ``refused_by`` names the model that refused: ``"constraints"`` (box and linear rows,
+    which are exact), ``"taylor"`` (the partially linear polynomial's floors or bands) or
+    ``"exact"`` (floors checked on the exact model as well).
+    """
+
+    def __init__(self, message: str, problem=None, result=None, refused_by: str = "taylor"):
         self.problem = problem
         self.result = result
+        self.refused_by = refused_by
         super().__init__(message)
 
 
@@ -135,6 +141,14 @@ class TaylorRadiusWarning(PinflexWarning):
 
 class AssignmentWarning(PinflexWarning):
     """An assignment answer is feasible but misses its target by more than asked."""
+
+
+class AssignmentNotImproved(AssignmentWarning):
+    """The assigned design's exact (tracked) target error is larger than the one before."""
+
+
+class ModeCrossingWarning(PinflexWarning):
+    """A mode crosses or veers with another along a trajectory: sorted and tracked differ."""
 
 
 class TrajectoryWarning(PinflexWarning):

@@ -13,10 +13,11 @@ modal assurance criterion
 .. math:: \mathrm{MAC}(\phi_a, \phi_b) = \frac{(\phi_a^T M \phi_b)^2}
           {(\phi_a^T M \phi_a)(\phi_b^T M \phi_b)} \in [0, 1],
 
-with ``M`` the mass matrix of the sample the comparison is made at. Each sample is matched to
-the previous one (a chain, robust to slow drift of the shapes) by the one-to-one assignment
-that maximises the summed MAC (``scipy.optimize.linear_sum_assignment``); the MAC against
-the reference sample's shapes is kept as data too.
+with ``M`` the mass matrix of the later of the two samples compared. Each sample is matched to
+its neighbour towards the reference (a chain, robust to slow drift of the shapes) by the
+one-to-one assignment that maximises the summed MAC (the plain best match when it is one to
+one, else ``scipy.optimize.linear_sum_assignment``); the MAC against the reference sample's
+shapes is kept as data too. All MAC matrices are computed in one batched product.
 
 Public API:
 
@@ -227,13 +228,6 @@ def eigenpairs(model, Q, y=None, *, n_modes: int | None = None, check_bounds: bo
     return lam, shapes, Mred
 
 
-def _walk_order(ns: int, start: int) -> list[tuple[int, int]]:
-    """(previous, current) steps outward from ``start`` in both directions."""
-    steps = [(s - 1, s) for s in range(start + 1, ns)]
-    steps += [(s + 1, s) for s in range(start - 1, -1, -1)]
-    return steps
-
-
 def track(
     eigvals: np.ndarray,
     shapes: np.ndarray,
@@ -294,23 +288,35 @@ def track(
     if start_shapes is None:
         perm[start] = np.arange(n)
     else:
-        C = mac_matrix(np.asarray(start_shapes, dtype=float), phi[start], weight(start))
-        rows, cols = linear_sum_assignment(-C)
+        C0 = mac_matrix(np.asarray(start_shapes, dtype=float), phi[start], weight(start))
+        rows, cols = linear_sum_assignment(-C0)
         perm[start, rows] = cols
-        mac_step[start, rows] = C[rows, cols]
+        mac_step[start, rows] = C0[rows, cols]
     ref_shapes = phi[start][:, perm[start]]  # reference shape of each slot, at `start`
-    for prev, cur in _walk_order(ns, start):
-        slots_prev = phi[prev][:, perm[prev]]
-        C = mac_matrix(slots_prev, phi[cur], weight(cur))
-        rows, cols = linear_sum_assignment(-C)
-        perm[cur, rows] = cols
-        mac_step[cur, rows] = C[rows, cols]
+    # MAC of sorted modes between consecutive samples, all steps at once: C[s] pairs the
+    # sorted modes of sample s (rows) with those of s + 1 (columns), weighted with M[s + 1].
+    C = _step_macs(phi, mass)
+    fwd, bwd = _step_maps(C)  # sorted index at s -> at s + 1, and back
+    for s in range(start, ns - 1):
+        perm[s + 1] = fwd[s][perm[s]]
+        mac_step[s + 1] = C[s][perm[s], perm[s + 1]]
+    for s in range(start - 1, -1, -1):
+        perm[s] = bwd[s][perm[s + 1]]
+        mac_step[s] = C[s][perm[s], perm[s + 1]]
     for r in range(n):
         bad = np.flatnonzero(mac_step[:, r] < mac_min)
         ambiguous.extend((int(s), r, float(mac_step[s, r])) for s in bad)
-    mac_ref = np.empty((ns, n))
-    for s in range(ns):
-        mac_ref[s] = np.diag(mac_matrix(ref_shapes, phi[s][:, perm[s]], weight(s)))
+    if mass is None:
+        cross = np.einsum("ir,sik->srk", ref_shapes, phi)
+        nref = np.einsum("ir,ir->r", ref_shapes, ref_shapes)[None, :]
+        nref = np.broadcast_to(nref, (ns, n))
+    else:
+        Mref = mass @ ref_shapes  # (ns, ndof, n)
+        cross = np.einsum("sir,sik->srk", Mref, phi)
+        nref = np.einsum("sir,ir->sr", Mref, ref_shapes)
+    nphi = np.einsum("sik,sik->sk", phi, phi if mass is None else mass @ phi)
+    idx = np.arange(ns)[:, None], np.arange(n)[None, :], perm
+    mac_ref = cross[idx] ** 2 / (nref * np.take_along_axis(nphi, perm, axis=1))
     tracked = np.take_along_axis(lam, perm, axis=1)  # (ns, n) by slot
     events = _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac,
                      mac_step)
@@ -326,6 +332,34 @@ def track(
         events=tuple(sorted(events, key=lambda e: (e.sample, e.kind, e.modes))),
         reference=int(start),
     )
+
+
+def _step_macs(phi: np.ndarray, mass: np.ndarray | None) -> np.ndarray:
+    """MAC matrices (ns − 1, n, n) between the sorted shapes of samples s and s + 1."""
+    a, b = phi[:-1], phi[1:]
+    mb = b if mass is None else mass[1:] @ b
+    ma = a if mass is None else mass[1:] @ a
+    cross = np.einsum("sik,sil->skl", a, mb)
+    na = np.einsum("sik,sik->sk", a, ma)
+    nb = np.einsum("sik,sik->sk", b, mb)
+    return cross**2 / (na[:, :, None] * nb[:, None, :])
+
+
+def _step_maps(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Best one-to-one maps of sorted indices across each step, forward and backward.
+
+    Where each row's best MAC is also its column's best (the usual case) that is the map;
+    otherwise the assignment maximising the summed MAC (Hungarian algorithm).
+    """
+    nstep, n, _ = C.shape
+    fwd = np.argmax(C, axis=2)
+    clean = np.all(np.sort(fwd, axis=1) == np.arange(n), axis=1)
+    clean &= np.all(np.argmax(C, axis=1) == np.argsort(fwd, axis=1), axis=1)
+    for s in np.flatnonzero(~clean):
+        rows, cols = linear_sum_assignment(-C[s])
+        fwd[s, rows] = cols
+    bwd = np.argsort(fwd, axis=1)
+    return fwd, bwd
 
 
 def _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac, mac_step):

@@ -7,6 +7,16 @@ trajectory and returns the QP (12)–(14) with the trapezoidal rule on the traje
 every answer with the exact ERLS model along the whole trajectory; errors reported before and
 after always come from the exact model.
 
+Mode identity: a target "mode i" is mode i at the expansion point, followed by shape along the
+design change and the trajectory (:mod:`pinflex.assignment.verify`, :mod:`pinflex.tracking`);
+``max_error_*`` are the errors of those tracked modes, ``max_error_*_sorted`` those of the
+sorted mode numbers. When a target mode crosses or veers with another one along the trajectory
+the two differ and :class:`~pinflex.exceptions.ModeCrossingWarning` is issued. A design whose
+tracked exact error is larger than before is never reported as an improvement: ``improved``
+is False and :class:`~pinflex.exceptions.AssignmentNotImproved` is issued (the design is still
+returned, for inspection; nothing is refused). Floors that the polynomial declares infeasible
+are checked on the exact model before refusing (see :mod:`pinflex.assignment.verify`).
+
 Quantity: targets are frequencies [Hz] and, by default, the polynomial expanded for the cost is
 the frequency ``f = √λ / 2π`` (``quantity="freq_hz"``). On benchmark A it is about twice as
 linear in the added masses as the eigenvalue ``λ = ω²`` (partial-linearization error 1.30 %
@@ -25,8 +35,20 @@ import numpy as np
 
 from pinflex.assignment.problem import AssignmentQP, QPSolution, build_assignment_qp
 from pinflex.assignment.solve import solve_assignment_qp
+from pinflex.assignment.verify import (
+    Verification,
+    exact_floor_candidates,
+    floor_margins,
+    verify_tracked,
+)
 from pinflex.erls import FlexibleModel
-from pinflex.exceptions import AssignmentWarning, ConfigurationError
+from pinflex.exceptions import (
+    AssignmentInfeasible,
+    AssignmentNotImproved,
+    AssignmentWarning,
+    ConfigurationError,
+    ModeCrossingWarning,
+)
 from pinflex.parametric import TaylorModel, expand
 from pinflex.trajectory import Trajectory
 
@@ -70,6 +92,18 @@ class AssignmentResult:
         settings: The constraints the problem was built with: ``mass_budget_kg``,
             ``floors`` ``[(mode, f_min_hz)]``, ``bands`` ``[(mode, a_hz, b_hz)]``,
             ``quantity`` (see :mod:`pinflex.assignment.report`).
+        freq_before_sorted_hz: Exact frequencies before of the sorted mode numbers.
+        freq_after_sorted_hz: The same after.
+        max_error_before_sorted: Largest target error before on the sorted mode numbers.
+        max_error_after_sorted: The same after.
+        improved: Whether the tracked exact error went down (never True when it went up).
+        events: Crossings, veering and ambiguous steps of the target modes along the
+            trajectory, before and after (:class:`pinflex.tracking.ModeEvent`).
+        floors_model: Which model the floors were enforced on: ``""`` (no floors),
+            ``"taylor"`` (the partially linear polynomial) or ``"taylor+exact"`` (corrected by
+            the exact model after the polynomial alone refused them).
+        floor_margin_hz: Smallest exact margin of the floors after (tracked modes) [Hz];
+            negative when a floor is violated on the exact model.
     """
 
     found: bool
@@ -89,6 +123,14 @@ class AssignmentResult:
     refinements: int = 0
     timings_s: dict[str, float] = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
+    freq_before_sorted_hz: np.ndarray | None = None
+    freq_after_sorted_hz: np.ndarray | None = None
+    max_error_before_sorted: float = float("nan")
+    max_error_after_sorted: float = float("nan")
+    improved: bool = True
+    events: tuple = ()
+    floors_model: str = ""
+    floor_margin_hz: float | None = None
 
 
 def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
@@ -144,7 +186,8 @@ def build_assignment(
         mass_budget_kg: Upper bound of the sum of the chosen design masses [kg].
         A_ineq: Extra rows ``A_ineq (y − y0) <= b_ineq`` on the chosen variables.
         b_ineq: Right-hand side of ``A_ineq``.
-        floors: ``(mode, f_min_hz)``: the mode's predicted frequency stays above f_min.
+        floors: ``(mode, f_min_hz)``: the mode's predicted frequency stays above f_min
+            (a constant or one value per sample).
         bands: ``(mode, a_hz, b_hz)``: forbidden band of a mode (see
             :func:`pinflex.assignment.problem.build_assignment_qp`).
         taylor: Reuse this Taylor model instead of expanding.
@@ -272,29 +315,42 @@ def assign_frequencies(
     for m in [t.mode for t in targets] + list(report_modes):
         if m not in modes:
             modes.append(int(m))
-    t0 = time.perf_counter()
-    if freq_before_hz is None:
-        f_before, err_before = exact_errors(model, Q, y_before, targets, modes)
-    else:
+    tgt = target_matrix(targets, Q.shape[0])
+    tmodes = [t.mode for t in targets]
+    if freq_before_hz is not None:
         f_before = np.asarray(freq_before_hz, dtype=float)
         if f_before.shape != (Q.shape[0], len(modes)):
             raise ConfigurationError(
                 f"freq_before_hz has shape {f_before.shape}; expected {(Q.shape[0], len(modes))}"
             )
-        cols = [modes.index(t.mode) for t in targets]
-        err_before = float(np.abs(f_before[:, cols].T / target_matrix(targets, Q.shape[0])
-                                  - 1.0).max())
-    timings["exact_before"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     problem, taylor = build_assignment(model, trajectory, targets, **build_kwargs)
     timings["expansion_and_build"] = time.perf_counter() - t0
+    reference = (taylor.q0, taylor.y0)
     t0 = time.perf_counter()
-    solution = solve_assignment_qp(problem)
+    if freq_before_hz is None:
+        before = verify_tracked(model, Q, y_before, tgt, tmodes, modes, reference)
+    else:  # given by the caller (a sweep shares them): taken as the tracked frequencies
+        cols = [modes.index(m) for m in tmodes]
+        err = float(np.abs(f_before[:, cols].T / tgt - 1.0).max())
+        before = Verification(None, f_before, f_before, err, err)
+    timings["exact_before"] = time.perf_counter() - t0
+    floors = list(build_kwargs.get("floors", ()))
+    t0 = time.perf_counter()
+    floors_model = "taylor" if floors else ""
+    try:
+        solution = solve_assignment_qp(problem)
+    except AssignmentInfeasible as exc:
+        if not floors or exc.result is not None:
+            raise _refusal(exc, problem) from None
+        problem, taylor, solution = _floors_on_exact(
+            model, trajectory, targets, build_kwargs, problem, taylor, y_before, exc)
+        floors_model = "taylor+exact"
     timings["qp"] = time.perf_counter() - t0
     y = _design_from(model, taylor, solution.dy)
     t0 = time.perf_counter()
-    f_after, err_after = exact_errors(model, Q, y, targets, modes)
+    after = verify_tracked(model, Q, y, tgt, tmodes, modes, reference)
     timings["exact_verification"] = time.perf_counter() - t0
     predicted = _predicted_error(problem, taylor, trajectory, targets, solution, build_kwargs)
     refinements = 0
@@ -302,35 +358,32 @@ def assign_frequencies(
         kwargs = dict(build_kwargs, y0=y, q0=taylor.q0, taylor=None)
         t0 = time.perf_counter()
         p2, tm2 = build_assignment(model, trajectory, targets, **kwargs)
-        s2 = solve_assignment_qp(p2)
-        y2 = _design_from(model, tm2, s2.dy)
-        f2, e2 = exact_errors(model, Q, y2, targets, modes)
-        timings["refinement"] = timings.get("refinement", 0.0) + time.perf_counter() - t0
-        if e2 >= err_after * (1 - 1e-9):
+        try:
+            s2 = solve_assignment_qp(p2)
+        except AssignmentInfeasible:
             break
-        problem, taylor, solution, y, f_after, err_after = p2, tm2, s2, y2, f2, e2
+        y2 = _design_from(model, tm2, s2.dy)
+        v2 = verify_tracked(model, Q, y2, tgt, tmodes, modes, reference)
+        timings["refinement"] = timings.get("refinement", 0.0) + time.perf_counter() - t0
+        if v2.max_error >= after.max_error * (1 - 1e-9):
+            break
+        problem, taylor, solution, y, after = p2, tm2, s2, y2, v2
         predicted = _predicted_error(problem, taylor, trajectory, targets, solution, kwargs)
         refinements += 1
+    margin = floor_margins(model, Q, y, floors, reference) if floors else None
     timings["total"] = time.perf_counter() - t_start
-    at_bound = [d.name for d, v in zip(model.design, y)
-                if v <= d.lower + 1e-9 or v >= d.upper - 1e-9]
-    if err_after > 0.05 and at_bound:
-        warnings.warn(
-            f"the best design leaves a {100 * err_after:.2f} % target error and sits on the "
-            f"bounds of {', '.join(at_bound)}: the target is out of reach of these design "
-            "variables; widen the bounds, add design variables or change the target",
-            AssignmentWarning,
-            stacklevel=2,
-        )
+    err_before, err_after = before.max_error, after.max_error
+    events = _target_events(before, after, tmodes)
+    _warn_outcome(model, y, before, after, events, tmodes, predicted, margin)
     return AssignmentResult(
         found=bool(solution.found),
         design={d.name: float(v) for d, v in zip(model.design, y)},
         y=y,
         y_before=y_before,
         modes=tuple(modes),
-        targets_hz=target_matrix(targets, Q.shape[0]),
-        freq_before_hz=f_before,
-        freq_after_hz=f_after,
+        targets_hz=tgt,
+        freq_before_hz=before.freq_hz,
+        freq_after_hz=after.freq_hz,
         max_error_before=err_before,
         max_error_after=err_after,
         predicted_max_error_after=predicted,
@@ -341,11 +394,156 @@ def assign_frequencies(
         timings_s=timings,
         settings={
             "mass_budget_kg": build_kwargs.get("mass_budget_kg"),
-            "floors": [(int(m), float(f)) for m, f in build_kwargs.get("floors", ())],
+            "floors": [(int(m), float(f) if np.ndim(f) == 0 else
+                        np.asarray(f, dtype=float).tolist())
+                       for m, f in build_kwargs.get("floors", ())],
             "bands": [(int(m), float(a), float(b)) for m, a, b in build_kwargs.get("bands", ())],
             "quantity": build_kwargs.get("quantity", "freq_hz"),
         },
+        freq_before_sorted_hz=before.sorted_hz,
+        freq_after_sorted_hz=after.sorted_hz,
+        max_error_before_sorted=before.max_error_sorted,
+        max_error_after_sorted=after.max_error_sorted,
+        improved=bool(err_after < err_before),
+        events=events,
+        floors_model=floors_model,
+        floor_margin_hz=margin,
     )
+
+
+def _refusal(exc: AssignmentInfeasible, problem) -> AssignmentInfeasible:
+    """The QP's refusal, saying which model refused it."""
+    groups = set(problem.constraint_groups)
+    model_based = bool(groups & {"floor", "band"})
+    who = "taylor" if model_based else "constraints"
+    text = ("refused by the partially linear Taylor model (floors/bands on the polynomial)"
+            if model_based else "refused by the box and linear constraints (exact)")
+    return AssignmentInfeasible(f"{exc} [{text}]", exc.problem, exc.result, refused_by=who)
+
+
+def _floors_on_exact(model, trajectory, targets, build_kwargs, problem, taylor, y_before, exc):
+    """Re-solve a QP whose polynomial floors were infeasible with exact-corrected floors."""
+    Q = model.check_q(trajectory.q)
+    reference = (taylor.q0, taylor.y0)
+    floors = list(build_kwargs["floors"])
+    best = None
+    for y in exact_floor_candidates(model, problem, taylor, y_before):
+        m = floor_margins(model, Q, y, floors, reference)
+        if best is None or m > best[1]:
+            best = (y, m)
+    if best is None or best[1] < 0:
+        detail = ("no design meets the box and linear constraints" if best is None else
+                  f"the best of the checked designs (y0, the design before and the box "
+                  f"corners), y = {np.round(best[0], 6).tolist()}, misses a floor by "
+                  f"{-best[1]:.4g} Hz")
+        raise AssignmentInfeasible(
+            f"{exc} [refused by the partially linear Taylor model and confirmed on the exact "
+            f"model: {detail}]", problem, None, refused_by="exact") from None
+    quantity = build_kwargs.get("quantity", "freq_hz")
+    y_star = best[0]
+    solution = None
+    for _ in range(4):
+        corrected = _corrected_floors(model, Q, taylor, y_star, floors, quantity, reference)
+        kwargs = dict(build_kwargs, floors=corrected, taylor=taylor)
+        problem, taylor = build_assignment(model, trajectory, targets, **kwargs)
+        solution = solve_assignment_qp(problem)
+        y = _design_from(model, taylor, solution.dy)
+        if floor_margins(model, Q, y, floors, reference) >= -1e-9 * max(
+                float(np.max(np.abs(np.asarray(f, dtype=float)))) for _, f in floors):
+            break
+        y_star = y
+    warnings.warn(
+        "the partially linear Taylor model declared the frequency floors infeasible, but the "
+        f"exact model meets them at y = {np.round(best[0], 6).tolist()} (margin "
+        f"{best[1]:.4g} Hz); the floors were corrected by the exact-minus-predicted offsets "
+        "and the QP solved again (floors_model = 'taylor+exact')",
+        AssignmentWarning,
+        stacklevel=3,
+    )
+    return problem, taylor, solution
+
+
+def _corrected_floors(model, Q, taylor, y_star, floors, quantity, reference):
+    """Floors shifted so that the polynomial equals the exact tracked model at ``y_star``."""
+    modes = tuple(sorted({int(m) for m, _ in floors}))
+    tr = verify_tracked(model, Q, y_star, np.ones((1, Q.shape[0])), [modes[0]], modes,
+                        reference).tracking
+    l0, L = taylor.linear_parts(Q, quantity=quantity)
+    didx = list(taylor.design_idx)
+    dy = y_star[didx] - taylor.y0[didx]
+    out = []
+    for m, fmin in floors:
+        k = taylor.modes.index(int(m))
+        pred = l0[:, k] + L[:, k, :] @ dy
+        exact_f = tr.freq_hz[:, modes.index(int(m))]
+        fmin = np.broadcast_to(np.asarray(fmin, dtype=float), exact_f.shape)
+        if quantity == "eigval":
+            lam = (2 * np.pi * fmin) ** 2 - ((2 * np.pi * exact_f) ** 2 - pred)
+            out.append((int(m), np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)))
+        else:
+            out.append((int(m), fmin - (exact_f - pred)))
+    return out
+
+
+def _target_events(before: Verification, after: Verification, target_modes) -> tuple:
+    """Crossing/veering/ambiguous events of target modes, before and after."""
+    seen, out = set(), []
+    for v in (before, after):
+        if v.tracking is None:
+            continue
+        for e in v.tracking.events:
+            if any(m in e.modes for m in target_modes):
+                key = (e.kind, e.sample, e.modes)
+                if key not in seen:
+                    seen.add(key)
+                    out.append(e)
+    return tuple(out)
+
+
+def _warn_outcome(model, y, before, after, events, target_modes, predicted, margin) -> None:
+    err_before, err_after = before.max_error, after.max_error
+    changed = [m for m in target_modes
+               if any(v.tracking is not None and v.tracking.changes_identity(m)
+                      for v in (before, after))]
+    if events or changed:
+        kinds = sorted({f"{e.kind} of modes {'/'.join(map(str, e.modes))} at sample {e.sample}"
+                        for e in events})[:4]
+        warnings.warn(
+            "target modes change their sorted number along the trajectory "
+            f"({'; '.join(kinds) or 'modes ' + str(changed)}): errors and frequencies refer "
+            "to the modes tracked by shape from the expansion point "
+            f"({100 * err_before:.2f} % -> {100 * err_after:.2f} %); the sorted mode numbers "
+            f"give {100 * before.max_error_sorted:.2f} % -> "
+            f"{100 * after.max_error_sorted:.2f} %",
+            ModeCrossingWarning,
+            stacklevel=3,
+        )
+    if err_after > err_before * (1 + 1e-9):
+        warnings.warn(
+            f"the assigned design is not an improvement: the exact error of the tracked target "
+            f"modes goes from {100 * err_before:.2f} % to {100 * err_after:.2f} % (the "
+            f"polynomial predicted {100 * predicted:.2f} %); keep the design before, expand "
+            "closer to the trajectory or at a higher order, or refine",
+            AssignmentNotImproved,
+            stacklevel=3,
+        )
+    if margin is not None and margin < 0:
+        warnings.warn(
+            f"a frequency floor is violated on the exact model by {-margin:.4g} Hz (tracked "
+            "modes) although the polynomial meets it",
+            AssignmentWarning,
+            stacklevel=3,
+        )
+    at_bound = [d.name for d, v in zip(model.design, y)
+                if v <= d.lower + 1e-9 or v >= d.upper - 1e-9]
+    if err_after > 0.05 and at_bound:
+        warnings.warn(
+            f"the best design leaves a {100 * err_after:.2f} % target error and sits on the "
+            f"bounds of {', '.join(at_bound)}: the target is out of reach of these design "
+            "variables; widen the bounds, add design variables or change the target",
+            AssignmentWarning,
+            stacklevel=3,
+        )
 
 
 def _design_from(model: FlexibleModel, taylor: TaylorModel, dy: np.ndarray) -> np.ndarray:

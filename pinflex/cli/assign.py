@@ -31,6 +31,13 @@ def summary(result, total_s: float) -> dict:
         "max_error_before": result.max_error_before,
         "max_error_after": result.max_error_after,
         "predicted_max_error_after": result.predicted_max_error_after,
+        "max_error_before_sorted": result.max_error_before_sorted,
+        "max_error_after_sorted": result.max_error_after_sorted,
+        "improved": result.improved,
+        "mode_events": [{"kind": e.kind, "sample": e.sample, "modes": list(e.modes)}
+                        for e in result.events],
+        "floors_model": result.floors_model,
+        "floor_margin_hz": result.floor_margin_hz,
         "qp_iterations": int(result.solution.iterations),
         "qp_time_s": float(result.solution.time_s),
         "refinements": result.refinements,
@@ -82,7 +89,15 @@ def cmd_assign(args: argparse.Namespace) -> int:
     print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
     print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
           f"{100 * result.max_error_after:.2f} % "
-          f"(predicted {100 * result.predicted_max_error_after:.2f} %)")
+          f"(predicted {100 * result.predicted_max_error_after:.2f} %)"
+          f"{'' if result.improved else '  NOT an improvement'}")
+    if result.events:
+        print(f"tracked modes: {len(result.events)} crossing/veering events; sorted mode numbers: "
+              f"{100 * result.max_error_before_sorted:.2f} % -> "
+              f"{100 * result.max_error_after_sorted:.2f} %")
+    if result.floors_model:
+        print(f"floors enforced on: {result.floors_model}; exact margin "
+              f"{result.floor_margin_hz:.4g} Hz")
     print(f"QP: {result.solution.iterations} iterations, {1e3 * result.solution.time_s:.3f} ms; "
           f"total {total:.3f} s")
     active = data.active
