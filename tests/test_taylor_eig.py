@@ -277,19 +277,29 @@ def _branch_family(c=3.0, x0=(0.25, 0.25)):
     return space, J.constant(space, np.eye(2)), K
 
 
-def test_radius_estimate_finds_square_root_branch_points():
-    """The radius estimate finds the branch points s = ±i within 10 %, inf along a linear axis."""
+def test_radius_estimate_is_the_root_test_and_scales_with_the_ray():
+    """Root test on λ = 3 + x3 ± √(1 + s²): optimistic at low order, tightening with p."""
     space, M, K = _branch_family()
     lam, _ = eigen_jets(space, M, K, [0, 1])
     true = np.hypot(0.5, 1.0)  # s0 = 0.5, branch points at s = ±i
     axes = radius_estimate(space, lam)
-    np.testing.assert_allclose(axes[:2], true, rtol=0.1)
-    assert np.all(np.isinf(axes[2]))
+    # by hand from the ray coefficients: min over j >= p/2 of |c0 / cj|^(1/j)
+    c = np.abs(J.ray_coefficients(space, lam, np.eye(3)))
+    by_hand = np.min([(c[:, 0] / c[:, j]) ** (1 / j) for j in range(4, 9)], axis=0)
+    np.testing.assert_allclose(axes[:2], by_hand[:2], rtol=1e-12)
+    assert np.all(np.isinf(axes[2]))  # λ is linear in x3
     diagonal = radius_estimate(space, lam, np.array([1.0, 1.0, 0.0]))
-    np.testing.assert_allclose(diagonal, true / 2, rtol=0.1)
-    low = J.JetSpace(3, 4)
-    coarse = radius_estimate(low, J.truncate(space, lam, low), np.array([1.0, 0.0, 0.0]))
-    np.testing.assert_allclose(coarse, true, rtol=0.3)
+    np.testing.assert_allclose(diagonal, axes[0] / 2, rtol=1e-12)  # s moves twice as fast
+    assert np.all(axes[0] > true)  # the value's offset makes it optimistic ...
+    deep = J.JetSpace(3, 24)
+    s = J.variable(deep, 0, 0.25) + J.variable(deep, 1, 0.25)
+    Kd = np.zeros((deep.ncoef, 2, 2))
+    Kd[:, 0, 1] = Kd[:, 1, 0] = s
+    Kd[:, 0, 0] = J.constant(deep, 4.0) + J.variable(deep, 2, 0.0)
+    Kd[:, 1, 1] = J.constant(deep, 2.0) + J.variable(deep, 2, 0.0)
+    lam_d, _ = eigen_jets(deep, J.constant(deep, np.eye(2)), Kd, [0, 1])
+    tight = radius_estimate(deep, lam_d, np.array([1.0, 0.0, 0.0]))
+    assert np.all(tight < axes[0]) and np.all(tight > true)  # ... and tightens with the order
 
 
 def test_invalid_inputs_raise():

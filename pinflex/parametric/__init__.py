@@ -19,8 +19,9 @@ for are expanded; the others stay at their expansion values.
 """
 
 from pinflex.parametric.along import SampledTaylor, TrajectoryExpansion, expand_along, sample
+from pinflex.parametric.eigen import radius_estimate
 from pinflex.parametric.matrices import JetAlgebra, matrix_jets, pose_jets
-from pinflex.parametric.model import TaylorModel, expand, root_test_radius
+from pinflex.parametric.model import TaylorModel, expand
 
 __all__ = [
     "JetAlgebra",
@@ -31,6 +32,6 @@ __all__ = [
     "expand_along",
     "matrix_jets",
     "pose_jets",
-    "root_test_radius",
+    "radius_estimate",
     "sample",
 ]
