@@ -12,7 +12,10 @@ against the exact model and prints
 * ``cautious``: sample-modes with an actual error below 0.1 % whose estimate is above 1 %;
 * the largest estimate along benchmark A's 152-sample trajectory for each order;
 * the cost of the check: ``evaluate`` of 152 samples with and without it (p = 4, modes 1–3),
-  interleaved in one process, median and range over rounds.
+  interleaved in one process, median and range over rounds;
+* the cost of verifying an assignment on tracked modes: ``verify_tracked`` (eigenpairs, MAC
+  tracking from the expansion point) against the sorted exact frequencies
+  (``exact_errors``) of the same 152 poses, interleaved likewise.
 """
 
 from __future__ import annotations
@@ -90,6 +93,32 @@ def check_cost(model, rounds):
             "max": float(np.max(ratios)), "rounds": rounds}
 
 
+def tracking_cost(model, rounds):
+    """Median and range of verify_tracked / exact_errors time on benchmark A, interleaved."""
+    from pinflex.assignment import Target, exact_errors
+    from pinflex.assignment.driver import target_matrix
+    from pinflex.assignment.verify import verify_tracked
+
+    traj = user_trajectory(model, "benchmark_a")
+    Q, y = traj.q, np.zeros(2)
+    targets = [Target(1, 190.0)]
+    tgt = target_matrix(targets, Q.shape[0])
+    ref = (Q0, Y0)
+    ratios = []
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        for _ in range(5):
+            exact_errors(model, Q, y, targets, [1, 2, 3, 4])
+        plain = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        for _ in range(5):
+            verify_tracked(model, Q, y, tgt, [1], [1, 2, 3, 4], ref)
+        tracked = time.perf_counter() - t0
+        ratios.append(tracked / plain)
+    return {"median": float(np.median(ratios)), "min": float(np.min(ratios)),
+            "max": float(np.max(ratios)), "rounds": rounds}
+
+
 def main():
     """Run the benchmark."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -105,6 +134,7 @@ def main():
         res = sweep(model, (1, 2, 3, 4, 6, 8), 40, 25)
         cost = check_cost(model, 9)
     res["check_cost_ratio"] = cost
+    res["tracking_cost_ratio"] = track = tracking_cost(model, 5 if args.quick else 9)
     if args.json:
         print(json.dumps(res))
         return
@@ -116,6 +146,9 @@ def main():
         print(f"  p = {p}: largest estimate along the benchmark A trajectory {100 * e:.3f} %")
     print(f"evaluate() with the check / without, 152 samples, p = 4: median {cost['median']:.2f}"
           f" (range {cost['min']:.2f}-{cost['max']:.2f}, {cost['rounds']} rounds)")
+    print(f"tracked verification / sorted exact frequencies, 152 poses: median "
+          f"{track['median']:.2f} (range {track['min']:.2f}-{track['max']:.2f}, "
+          f"{track['rounds']} rounds)")
 
 
 if __name__ == "__main__":

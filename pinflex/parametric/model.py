@@ -138,7 +138,7 @@ class TaylorModel:
 
         This is an estimate, not a rigorous bound. On benchmark A (orders 1–8, 45 joint and
         design directions, offsets 0.03–2.5, 4194 sample-modes) the actual error exceeded 1 %
-        where the estimate stayed below 1 % once (order 2, actual 2.2× the estimate); the
+        where the estimate stayed below 1 % twice (actual at most 2.2× the estimate); the
         estimate flags 51 sample-modes whose actual error is below 0.1 % (cautious). Along
         benchmark A's trajectory at ``p = 4`` it stays below 0.8 %
         (``python benchmarks/bench_radius.py``).
