@@ -101,7 +101,7 @@ def exact_floor_candidates(model, problem, taylor, y_before: np.ndarray) -> list
             y[didx] += np.asarray(corner)
             cands.append(y)
     rows = np.array([g == "inequality" for g in problem.constraint_groups], dtype=bool)
-    keep = []
+    keep: list[np.ndarray] = []
     for y in cands:
         dy = y[didx] - y0[didx]
         if np.any(dy < lo - 1e-12) or np.any(dy > hi + 1e-12):

@@ -23,6 +23,7 @@ from pinflex.parametric.matrices import matrix_jets
 
 RADIUS_TOL = 1e-2
 """Default warning level of the estimated relative truncation error (1 %)."""
+_TINY = np.finfo(float).tiny
 
 
 @dataclass(frozen=True)
@@ -157,46 +158,52 @@ class TaylorModel:
         return self._estimate_from(dx, mon @ self._degree_blocks(quantity))[:2]
 
     def _estimate_from(self, dx: np.ndarray, con: np.ndarray):
-        """(estimate, ratio, contributions) from per-degree contributions ``mon @ blocks``."""
+        """(estimate, ratio, value) from ``mon @ _degree_blocks(quantity)``."""
         p, k = self.order, len(self.modes)
         n = dx.shape[0]
-        con = con.reshape(n, p + 1, k)
-        a = np.abs(con)
-        c0 = a[:, 0]
+        value = con[:, k * (p + 1):]
+        a = np.abs(con[:, :k * (p + 1)]).reshape(n, k, p + 1)  # (sample, mode, degree)
+        c0 = np.maximum(a[:, :, 0], _TINY)
         if p >= 1:
             j0 = max(1, (p + 1) // 2)
-            r = a[:, j0:] / c0[:, None]
+            r = a[:, :, j0:] / c0[:, :, None]
             np.power(r, self._inverse_orders(j0), out=r)
-            rho = r.max(axis=1)
+            rho = r.max(axis=2)
         else:
             rho = np.zeros((n, k))
         W = self._spectral_weights()
         if W is not None:  # twice the meeting rate: half the meeting distance
             np.maximum(rho, np.abs(dx @ W).reshape(n, k, -1).max(axis=2), out=rho)
-        tail = np.maximum(a[:, p], rho * a[:, p - 1]) if p >= 1 else rho * c0
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            est = tail * rho / ((1.0 - rho) * c0)
+        tail = np.maximum(a[:, :, p], rho * a[:, :, p - 1]) if p >= 1 else rho * c0
+        # no errstate context here (it costs more than the arithmetic): guard the divisions
+        est = tail * rho / (np.maximum(1.0 - rho, 1e-12) * c0)
         est[rho >= 1.0] = np.inf
-        return est, rho, con
+        return est, rho, value
 
     def _inverse_orders(self, j0: int) -> np.ndarray:
         """Exponents 1/j (j = j0..p) shaped for the root test, cached."""
         inv = self.__dict__.get("_inv_orders")
         if inv is None:
-            inv = (1.0 / np.arange(j0, self.order + 1, dtype=float))[None, :, None]
+            inv = (1.0 / np.arange(j0, self.order + 1, dtype=float))[None, None, :]
             self.__dict__["_inv_orders"] = inv
         return inv
 
     def _degree_blocks(self, quantity: str) -> np.ndarray:
-        """(ncoef, (p+1)·k): column block d holds the degree-d coefficients only, cached."""
+        """Coefficient blocks (ncoef, k·(p+1) + k) for contributions and value, cached.
+
+        Per mode, one column per degree holding that degree's coefficients only, then the full
+        coefficients: one product with the monomials gives both.
+        """
         cache = self.__dict__.setdefault("_block_cache", {})
         if quantity not in cache:
             coef = self._coefficients(quantity, False)
             p, k = self.order, coef.shape[1]
             off = self.space.degree_offsets
-            B = np.zeros((coef.shape[0], (p + 1) * k))
-            for d in range(p + 1):
-                B[off[d]:off[d + 1], d * k:(d + 1) * k] = coef[off[d]:off[d + 1]]
+            B = np.zeros((coef.shape[0], k * (p + 1) + k))
+            for c in range(k):
+                for d in range(p + 1):
+                    B[off[d]:off[d + 1], c * (p + 1) + d] = coef[off[d]:off[d + 1], c]
+            B[:, k * (p + 1):] = coef
             cache[quantity] = B
         return cache[quantity]
 
@@ -283,11 +290,11 @@ class TaylorModel:
         if not (warn or strict):
             return mon @ self._coefficients(quantity, bool(linear_in_design))
         # one product gives the per-degree contributions for the check and, summed, the value
-        est, ratio, con = self._estimate_from(dx, mon @ self._degree_blocks(quantity))
+        est, ratio, value = self._estimate_from(dx, mon @ self._degree_blocks(quantity))
         self._report(est, ratio, tol, strict)
         if linear_in_design:
             return mon @ self._coefficients(quantity, True)
-        return con.sum(axis=1)
+        return value
 
     def _coefficients(self, quantity: str, linear: bool) -> np.ndarray:
         """Coefficient matrix (ncoef, k) of a polynomial, cached."""
