@@ -9,9 +9,10 @@ Three groups of references:
 * closed forms for uniform beams and rods (Euler–Bernoulli bending, torsion, axial);
 * a global planar frame model of benchmark A (paper 000's two-link arm, SPEC §5):
   2D Euler–Bernoulli frame elements in world axes, a pin at the base and a hinge at
-  the elbow;
+  the elbow, either of which may instead carry a torsional spring or be clamped;
 * a global spatial frame model of a serial chain of straight beams: 12-dof
-  Euler–Bernoulli elements in world axes, joints that are either fixed or revolute.
+  Euler–Bernoulli elements in world axes, joints that are fixed, revolute, or revolute
+  with a torsional spring.
 
 Conventions shared by all models:
 
@@ -21,7 +22,8 @@ Conventions shared by all models:
   Euler–Bernoulli), torsional rotary inertia rho_Ip in the spatial element.
 * Eigenvalues are lambda = omega^2 [rad^2/s^2], frequencies are f = sqrt(lambda) / (2 pi)
   [Hz]. Rigid (zero) modes are counted with a relative threshold and set apart; their
-  count must equal the number of revolute joints, otherwise ``RuntimeError``.
+  count must equal the number of revolute joints without a spring, otherwise
+  ``RuntimeError``.
 """
 
 from __future__ import annotations
@@ -232,24 +234,48 @@ def planar_frame_element(
     return k, m
 
 
-def planar_chain_dofs(n_elements: Sequence[int]) -> list[np.ndarray]:
-    """Global dof numbers of a planar chain with a pinned base and hinges between links.
+def _joint_kind(spec, where: str) -> str:
+    """'hinge', 'spring' or 'clamped' from a joint spec (None, 'clamped' or a stiffness)."""
+    if spec is None or (isinstance(spec, str) and spec == "hinge"):
+        return "hinge"
+    if isinstance(spec, str):
+        if spec == "clamped":
+            return "clamped"
+        raise ValueError(f"{where}: unknown joint spec {spec!r}")
+    if not float(spec) > 0 or not math.isfinite(float(spec)):
+        raise ValueError(f"{where}: a torsional spring needs a positive finite stiffness")
+    return "spring"
+
+
+def planar_chain_dofs(n_elements: Sequence[int], joints: Sequence | None = None
+                      ) -> list[np.ndarray]:
+    """Global dof numbers of a planar chain with a base joint and joints between links.
 
     For link i, ``dofs[i]`` has shape (n_elements[i] + 1, 3): row j holds the global
     indices of (u, v, theta) at node j of the link, -1 for a fixed dof. Numbering walks
     the chain: base rotation first (base translations fixed), then for each link its
     nodes 1..n in order, (u, v, theta) per node; a hinge node is numbered with the link
     that ends there, and the next link only adds its own rotation there, numbered just
-    before its node 1. Total 3 * sum(n_elements) + number of links.
+    before its node 1. Total 3 * sum(n_elements) + number of links with the default
+    (every joint a hinge).
+
+    ``joints`` (one per link; joint i is at the start of link i, joint 0 the base): a hinge
+    or a spring gives link i its own rotation there; ``'clamped'`` shares the rotation of
+    the link that ends there (the base's is fixed), so no own rotation is numbered.
     """
+    kinds = [_joint_kind(None if joints is None else joints[i], f"joint {i}")
+             for i in range(len(n_elements))]
     dofs = []
     counter = 0
     for i, n in enumerate(n_elements):
         table = np.full((n + 1, 3), -1, dtype=int)
         if i > 0:
             table[0, :2] = dofs[-1][-1, :2]  # hinge: shared translations
-        table[0, 2] = counter  # own rotation at the proximal joint
-        counter += 1
+        if kinds[i] == "clamped":
+            table[0, 2] = dofs[-1][-1, 2] if i > 0 else -1
+        else:
+            table[0, 2] = counter  # own rotation at the proximal joint
+            counter += 1
         for j in range(1, n + 1):
             table[j] = np.arange(counter, counter + 3)
             counter += 3
@@ -278,12 +304,18 @@ def planar_chain_matrices(
     rhoA,
     EA,
     end_masses: Sequence[float] | None = None,
+    joints: Sequence | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Assembled (K, M) of a planar serial chain of straight links, world axes.
 
     Link 0 starts at a pin at the origin, link i starts at the end of link i-1 where the
     two are joined by a hinge (shared translations, separate rotations). Dof layout:
     :func:`planar_chain_dofs`.
+
+    ``joints`` (one per link, joint 0 the base, default all hinges): ``None`` a hinge, a
+    number ``k`` [N m/rad] a torsional spring on the relative rotation (strain energy
+    ``k (theta_child - theta_parent)^2 / 2``, ``k theta^2 / 2`` at the base), ``'clamped'``
+    a rigid connection.
 
     Args:
         angles: absolute link angles [rad] from the world x axis, one per link.
@@ -302,7 +334,7 @@ def planar_chain_matrices(
     if not (len(lengths) == len(n_elements) == n_links):
         raise ValueError("angles, lengths and n_elements must have one entry per link")
     EI, rhoA, EA = (_per_link(v, n_links, s) for v, s in ((EI, "EI"), (rhoA, "rhoA"), (EA, "EA")))
-    dofs = planar_chain_dofs(n_elements)
+    dofs = planar_chain_dofs(n_elements, joints)
     ndof = int(max(t.max() for t in dofs)) + 1
     K = np.zeros((ndof, ndof))
     M = np.zeros((ndof, ndof))
@@ -327,7 +359,25 @@ def planar_chain_matrices(
                 raise ValueError(f"end mass of link {i} is negative: {mass}")
             for d in dofs[i][-1, :2]:
                 M[d, d] += mass
+    for i in range(n_links):
+        spec = None if joints is None else joints[i]
+        if _joint_kind(spec, f"joint {i}") != "spring":
+            continue
+        child = dofs[i][0, 2]
+        parent = dofs[i - 1][-1, 2] if i > 0 else -1
+        k = float(spec)
+        K[child, child] += k
+        if parent >= 0:
+            K[parent, parent] += k
+            K[parent, child] -= k
+            K[child, parent] -= k
     return K, M
+
+
+def n_hinges(joints: Sequence | None, n_links: int) -> int:
+    """Rigid (mechanism) modes of a planar chain: the joints that are plain hinges."""
+    return sum(_joint_kind(None if joints is None else joints[i], f"joint {i}") == "hinge"
+               for i in range(n_links))
 
 
 def planar_two_link_matrices(
@@ -342,6 +392,7 @@ def planar_two_link_matrices(
     EI: float = 69e9 * 3.97e-8,
     rhoA: float = 1.9,
     EA: float = 69e9 * 7.07e-4,
+    joints: Sequence | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Assembled (K, M) of benchmark A in pose ``q_abs`` (global planar frame model).
 
@@ -357,16 +408,19 @@ def planar_two_link_matrices(
         EI: bending stiffness [N m^2] (SPEC §5: E = 69 GPa, I = 3.97e-8 m^4).
         rhoA: mass per length [kg/m].
         EA: axial stiffness [N] (A = 7.07e-4 m^2).
+        joints: base and elbow conditions (see :func:`planar_chain_matrices`), default
+            two hinges.
 
     Returns:
-        ``(K, M)`` of shape (3*(n1+n2)+2,)*2, i.e. 23 x 23 by default, with dofs
+        ``(K, M)`` of shape (3*(n1+n2)+2,)*2, i.e. 23 x 23 with two hinges, with dofs
         0: base rotation; 1..3(n1-1): link-1 interior nodes (u, v, th) each;
         then the elbow (u, v, th of link 1), th of link 2 at the elbow; link-2 nodes
         1..n2 (u, v, th) each, the tip last. Default indices: elbow u, v = 10, 11,
         elbow th1 = 12, th2 = 13, tip u, v, th = 20, 21, 22.
     """
     return planar_chain_matrices(
-        q_abs, [L1, L2], [n1, n2], EI=EI, rhoA=rhoA, EA=EA, end_masses=[m1, m2]
+        q_abs, [L1, L2], [n1, n2], EI=EI, rhoA=rhoA, EA=EA, end_masses=[m1, m2],
+        joints=joints,
     )
 
 
@@ -382,20 +436,22 @@ def planar_two_link_frequencies(
     EI: float = 69e9 * 3.97e-8,
     rhoA: float = 1.9,
     EA: float = 69e9 * 7.07e-4,
+    joints: Sequence | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Eigenvalues and elastic frequencies of benchmark A in pose ``q_abs``.
 
     Arguments as :func:`planar_two_link_matrices`.
 
     Returns:
-        ``(eigvals, freqs_hz)``: all 3*(n1+n2)+2 eigenvalues lambda = omega^2
-        [rad^2/s^2] ascending (the first two ~0: rotation about the base pin and about
-        the elbow), and the 3*(n1+n2) elastic frequencies [Hz] ascending.
+        ``(eigvals, freqs_hz)``: all eigenvalues lambda = omega^2 [rad^2/s^2] ascending
+        (with two hinges the first two ~0: rotation about the base pin and about the
+        elbow), and the elastic frequencies [Hz] ascending (springs included: a spring's
+        joint rotation is an elastic dof).
     """
     K, M = planar_two_link_matrices(
-        q_abs, m1, m2, L1=L1, L2=L2, n1=n1, n2=n2, EI=EI, rhoA=rhoA, EA=EA
+        q_abs, m1, m2, L1=L1, L2=L2, n1=n1, n2=n2, EI=EI, rhoA=rhoA, EA=EA, joints=joints
     )
-    return solve_frequencies(K, M, n_rigid=2)
+    return solve_frequencies(K, M, n_rigid=n_hinges(joints, 2))
 
 
 # ---------------------------------------------------------------------------------------
@@ -536,7 +592,7 @@ class SpatialFrame:
             beam, start to end; node r owns rows 6r..6r+5 of ``T`` in the order
             (ux, uy, uz, thx, thy, thz), world axes.
         beam_of_node: beam index of each node, shape (n_nodes,).
-        n_rigid: number of revolute joints, base included (= rigid modes).
+        n_rigid: number of revolute joints without a spring, base included (= rigid modes).
     """
 
     K: np.ndarray
@@ -554,6 +610,7 @@ def spatial_frame_model(
     *,
     point_masses: Sequence[tuple[Sequence[float], float]] = (),
     base="fixed",
+    springs: dict[int, float] | None = None,
 ) -> SpatialFrame:
     """Global 3D frame model of a serial chain of straight beams, world axes.
 
@@ -579,9 +636,11 @@ def spatial_frame_model(
         point_masses: pairs (world point [m], mass [kg]); each point must be a node
             (tolerance 1e-9 of the model size). Translational inertia only.
         base: ``'fixed'`` or a world axis 3-vector for a revolute base.
-
-    Returns:
-        A :class:`SpatialFrame`.
+        springs: torsional springs ``{joint: k}`` [N m/rad] on revolute joints, joint 0 the
+            base and joint i + 1 the interior joint ``joints[i]``: strain energy
+            ``k (theta_child - theta_parent)^2 / 2`` of the rotations about the joint axis
+            (``k theta^2 / 2`` at the base). A sprung joint is not a mechanism, so it does
+            not count in ``n_rigid``. A clamped joint is ``'fixed'``.
 
     Raises:
         ValueError: inconsistent sizes, non-positive section values, a zero-length beam,
@@ -620,11 +679,21 @@ def spatial_frame_model(
         for r in range(6):
             add({row0 + r: 1.0})
 
+    springs = dict(springs or {})
+    for key, k in springs.items():
+        if not (0 <= key < n_beams) or not k > 0:
+            raise ValueError(f"spring {key}: k = {k} must be positive on an existing joint")
+    spring_pairs = []  # (stiffness, parent column or -1, child column)
     n_rigid = 0
     axis = _joint_axis(base, "base")
     if axis is not None:
         add({6 * first_node[0] + 3 + c: axis[c] for c in range(3)})
-        n_rigid += 1
+        if 0 in springs:
+            spring_pairs.append((springs[0], -1, len(columns) - 1))
+        else:
+            n_rigid += 1
+    elif 0 in springs:
+        raise ValueError("a spring at the base needs a revolute base")
     for i, b in enumerate(beams):
         start = 6 * first_node[i]
         for j in range(1, b.n_elements):
@@ -650,7 +719,10 @@ def spatial_frame_model(
                 )
             add({end + 3 + c: axis[c] for c in range(3)})  # parent's rotation about a
             add({nxt + 3 + c: axis[c] for c in range(3)})  # child's rotation about a
-            n_rigid += 1
+            if i + 1 in springs:
+                spring_pairs.append((springs[i + 1], len(columns) - 2, len(columns) - 1))
+            else:
+                n_rigid += 1
     T = np.zeros((n_full, len(columns)))
     for col, entries in enumerate(columns):
         for row, val in entries.items():
@@ -679,8 +751,18 @@ def spatial_frame_model(
             raise ValueError(f"point mass at {point} is not at a node (nearest node {nodes[r]})")
         M_full[6 * r : 6 * r + 3, 6 * r : 6 * r + 3] += mass * np.eye(3)  # one copy only
 
+    for key in springs:
+        if key > 0 and _joint_axis(joints[key - 1], f"joint {key - 1}") is None:
+            raise ValueError(f"spring {key}: joint {key - 1} is fixed, not revolute")
+    K_ind = T.T @ K_full @ T
+    for k, parent, child in spring_pairs:
+        K_ind[child, child] += k
+        if parent >= 0:
+            K_ind[parent, parent] += k
+            K_ind[parent, child] -= k
+            K_ind[child, parent] -= k
     return SpatialFrame(
-        K=_sym(T.T @ K_full @ T),
+        K=_sym(K_ind),
         M=_sym(T.T @ M_full @ T),
         T=T,
         nodes=nodes,
@@ -696,6 +778,7 @@ def spatial_frame_frequencies(
     *,
     point_masses: Sequence[tuple[Sequence[float], float]] = (),
     base="fixed",
+    springs: dict[int, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Eigenvalues and elastic frequencies of a spatial frame chain.
 
@@ -706,5 +789,6 @@ def spatial_frame_frequencies(
         (the first ``n_rigid`` ~0, one per revolute joint including a revolute base), and
         the elastic frequencies [Hz] ascending.
     """
-    model = spatial_frame_model(points, beams, joints, point_masses=point_masses, base=base)
+    model = spatial_frame_model(points, beams, joints, point_masses=point_masses, base=base,
+                                springs=springs)
     return solve_frequencies(model.K, model.M, model.n_rigid)

@@ -70,7 +70,7 @@ def _spatial_urdf(m1, m2, e1=5, e2=4):
 </robot>"""
 
 
-def _reference(q, m1, m2, e1=5, e2=4):
+def _reference(q, m1, m2, e1=5, e2=4, *, springs=None, elbow=None):
     s = SPATIAL
     a2 = s["a2"] / np.linalg.norm(s["a2"])
     R1 = _rot([0, 0, 1], q[0])
@@ -95,8 +95,8 @@ def _reference(q, m1, m2, e1=5, e2=4):
     beams = [beam(SEC1, e1, z_axis(R1, s["t1"], s["n1"])),
              beam(SEC2, e2, z_axis(R2, s["t2"], s["n2"]))]
     return spatial_frame_frequencies(
-        np.array([np.zeros(3), p1, p2]), beams, [Rj @ a2],
-        point_masses=[(p1, m1), (p2, m2)], base=np.array([0.0, 0.0, 1.0]),
+        np.array([np.zeros(3), p1, p2]), beams, [Rj @ a2 if elbow is None else elbow],
+        point_masses=[(p1, m1), (p2, m2)], base=np.array([0.0, 0.0, 1.0]), springs=springs,
     )
 
 

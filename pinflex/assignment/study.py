@@ -197,7 +197,7 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
     result = assign_frequencies(
         model, traj, cfg.targets,
         y_before=baseline, refine=cfg.refine, taylor=taylor, freq_before_hz=freq_before_hz,
-        report_modes=[m for m in cfg.report_modes if m <= model.nx],
+        report_modes=[m for m in cfg.report_modes if m <= model.n_elastic],
         q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
         order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,
         floors=cfg.floors, bands=cfg.bands,

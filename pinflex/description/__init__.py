@@ -30,6 +30,11 @@ station, with a rigid offset from the axis.
 ``<pinflex:point_mass>``: ``name``, ``link``, ``xyz`` in the link frame [m], ``mass`` [kg];
 with ``design="true"`` it is a design variable with ``lower``/``upper`` bounds [kg].
 
+``<pinflex:joint name="..." stiffness="..."/>`` puts a spring on a moving joint's physical
+relative motion [N m/rad revolute, N/m prismatic]; ``locked="true"`` holds it rigidly. These
+conditions apply when a model is built with ``joints="annotated"`` (the default is all
+joints free, see :class:`pinflex.erls.FlexibleModel`).
+
 ``<pinflex:coordinates convention="absolute"/>`` declares that the user-facing coordinates of a
 planar serial arm are absolute link angles (paper 000's convention) instead of Pinocchio's
 relative joint angles; see :class:`pinflex.erls.FlexibleModel`.
@@ -48,6 +53,7 @@ from pinflex.description.types import (
     SUPPORTED_JOINTS,
     FlexibleLink,
     Joint,
+    JointAnnotation,
     PointMass,
     RigidInertia,
     RobotDescription,
@@ -60,6 +66,7 @@ __all__ = [
     "SUPPORTED_JOINTS",
     "FlexibleLink",
     "Joint",
+    "JointAnnotation",
     "PointMass",
     "RigidInertia",
     "RobotDescription",

@@ -12,8 +12,10 @@ from pinflex.description.overlay import apply_overlay, resolve_base
 from pinflex.description.types import (
     _NS,
     SUPPORTED_JOINTS,
+    MOVING_JOINTS,
     FlexibleLink,
     Joint,
+    JointAnnotation,
     PointMass,
     RigidInertia,
     RobotDescription,
@@ -22,6 +24,7 @@ from pinflex.exceptions import (
     InvalidBeamProperty,
     InvalidDescription,
     LinkNotFound,
+    JointNotFound,
     UnsupportedJoint,
 )
 
@@ -82,6 +85,12 @@ def parse(urdf_xml: str, base_dir: Path | None = None) -> RobotDescription:
     names = [p.name for p in point_masses]
     if len(set(names)) != len(names):
         raise InvalidDescription(f"point mass names must be unique, got {names}")
+    annotations: dict[str, JointAnnotation] = {}
+    for el in root_el.findall(_NS + "joint"):
+        a = _parse_joint_annotation(el, joints)
+        if a.name in annotations:
+            raise InvalidDescription(f"joint '{a.name}' has two <pinflex:joint> elements")
+        annotations[a.name] = a
     absolute = False
     for el in root_el.findall(_NS + "coordinates"):
         conv = el.get("convention", "relative")
@@ -103,6 +112,7 @@ def parse(urdf_xml: str, base_dir: Path | None = None) -> RobotDescription:
         absolute_coordinates=absolute,
         child_joints={k: tuple(v) for k, v in child_joints.items()},
         parent_joint=parent_joint,
+        joint_annotations=annotations,
     )
 
 
@@ -318,3 +328,23 @@ def _parse_point_mass(el: ET.Element, links: tuple[str, ...]) -> PointMass:
     if design and lower < 0.0:
         raise InvalidDescription(f"{what}: lower bound {lower} would allow a negative mass")
     return PointMass(name, link, xyz, mass, design, lower, upper)
+
+
+def _parse_joint_annotation(el: ET.Element, joints: dict[str, Joint]) -> JointAnnotation:
+    name = el.get("name")
+    if not name:
+        raise InvalidDescription("<pinflex:joint> needs a 'name' (a moving URDF joint)")
+    moving = [n for n, j in joints.items() if j.type in MOVING_JOINTS]
+    if name not in moving:
+        raise JointNotFound(name, moving)
+    what = f"<pinflex:joint name='{name}'>"
+    locked_text = el.get("locked", "false").lower()
+    if locked_text not in ("1", "true", "yes", "0", "false", "no"):
+        raise InvalidDescription(f"{what}: locked='{el.get('locked')}' must be true or false")
+    locked = locked_text in ("1", "true", "yes")
+    stiffness = _float_attr(el, "stiffness", what, required=False)
+    if locked and stiffness is not None:
+        raise InvalidDescription(
+            f"{what}: give either stiffness=\"...\" (a spring) or locked=\"true\", not both"
+        )
+    return JointAnnotation(name, stiffness, locked)

@@ -134,6 +134,23 @@ class PointMass:
 
 
 @dataclass(frozen=True)
+class JointAnnotation:
+    """The mechanical condition a ``<pinflex:joint>`` element gives a moving joint.
+
+    Attributes:
+        name: Joint name (a revolute, continuous or prismatic URDF joint).
+        stiffness: Spring stiffness on the joint's physical relative motion [N m/rad for a
+            revolute joint, N/m for a prismatic one], or ``None`` for no spring.
+        locked: Whether the joint is held rigidly (the child's root follows the parent's
+            deformed attachment).
+    """
+
+    name: str
+    stiffness: float | None = None
+    locked: bool = False
+
+
+@dataclass(frozen=True)
 class RobotDescription:
     """Everything pinflex reads from an annotated URDF.
 
@@ -148,6 +165,8 @@ class RobotDescription:
         flexible: Flexible links by link name.
         point_masses: Point masses in file order.
         absolute_coordinates: Whether user coordinates are absolute link angles.
+        joint_annotations: ``<pinflex:joint>`` conditions by joint name (used when a model
+            is built with ``joints="annotated"``).
     """
 
     name: str
@@ -162,6 +181,7 @@ class RobotDescription:
     absolute_coordinates: bool = False
     child_joints: dict[str, tuple[str, ...]] = field(default_factory=dict)
     parent_joint: dict[str, str] = field(default_factory=dict)
+    joint_annotations: dict[str, JointAnnotation] = field(default_factory=dict)
 
     def require_link(self, name: str) -> None:
         """Raise :class:`LinkNotFound` unless ``name`` is a link."""

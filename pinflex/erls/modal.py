@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pinflex.erls import joints
 from pinflex.erls.terms import BatchAlgebra
 from pinflex.exceptions import ConfigurationError, EigenSolverError
 from pinflex.linalg import rotate_twist
@@ -19,10 +20,11 @@ class ModalResult:
     Attributes:
         q: Joint coordinates (user convention) [rad or m], (nv,).
         y: Design values [kg], (ny,).
-        ndof: Number of generalized coordinates nx + nv.
-        rigid_modes: Number of rigid (zero-frequency) modes.
+        ndof: Number of modal coordinates nx + (joints not locked).
+        rigid_modes: Number of rigid (zero-frequency) modes (the free joints).
         eigvals: Non-rigid eigenvalues λ = ω² ascending [rad²/s²], (k,).
-        shapes: Mass-normalised mode shapes over ``[x; q]``, (ndof, k).
+        shapes: Mass-normalised mode shapes over the modal coordinates ``[x; q_kept]``
+            (``q_kept``: the joints that are not locked), (ndof, k).
         node_positions: World positions of beam nodes per flexible link [m], (N+1, 3) each.
         node_motion: Per flexible link, the world-axes nodal translation and rotation of each
             mode, (k, N+1, 6); ``node_elastic`` the elastic part only (rigid ERLS motion removed).
@@ -73,22 +75,43 @@ class ModalResult:
 
 
 def reduced(model, M: np.ndarray, K: np.ndarray):
-    """Elastic mass with the rigid coordinates condensed out, and Kxx."""
-    nx = model.nx
-    Mxx, Mxq, Mqq = M[..., :nx, :nx], M[..., :nx, nx:], M[..., nx:, nx:]
-    if model.nv:
+    """Elastic mass with the free joints' coordinates condensed out, and the elastic K.
+
+    The elastic block holds ``x`` and the coordinates of spring-held joints; the free joints'
+    coordinates carry no stiffness and are condensed out exactly.
+    """
+    if model._joints_plain:
+        nx = model.nx
+        Mee, Mer, Mrr = M[..., :nx, :nx], M[..., :nx, nx:], M[..., nx:, nx:]
+        Kee = K[..., :nx, :nx]
+    else:
+        M, K = relative_joint_values(model, M, K)
+        e, r = model._elastic_cols, model._rigid_cols
+        Mee, Mer, Mrr = M[..., e[:, None], e], M[..., e[:, None], r], M[..., r[:, None], r]
+        Kee = K[..., e[:, None], e]
+    if Mrr.shape[-1]:
         try:
-            Lq = np.linalg.cholesky(Mqq)
+            Lq = np.linalg.cholesky(Mrr)
         except np.linalg.LinAlgError as exc:
             raise EigenSolverError(
                 "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
                 "add inertia to the links it drives"
             ) from exc
-        Z = np.linalg.inv(Lq) @ np.swapaxes(Mxq, -1, -2)
-        Mred = Mxx - np.swapaxes(Z, -1, -2) @ Z
+        Z = np.linalg.inv(Lq) @ np.swapaxes(Mer, -1, -2)
+        Mred = Mee - np.swapaxes(Z, -1, -2) @ Z
     else:
-        Mred = Mxx
-    return Mred, K[..., :nx, :nx]
+        Mred = Mee
+    return Mred, Kee
+
+
+def relative_joint_values(model, M: np.ndarray, K: np.ndarray):
+    """``M``, ``K`` with the kept joints in relative values (where free joints carry no K)."""
+    Winv = model._modal_Winv
+    if Winv is None:
+        return M, K
+    P = np.eye(model.ndof)
+    P[model.nx:, model.nx:] = Winv
+    return P.T @ M @ P, P.T @ K @ P
 
 
 def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
@@ -108,7 +131,7 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
 
 def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
     """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof)."""
-    if model.nx == 0:
+    if model.n_elastic == 0:
         return np.zeros(M.shape[:-2] + (0,))
     Mred, Kxx = reduced(model, M, K)
     try:
@@ -121,7 +144,8 @@ def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
     if np.any(lam <= 0.0):
         raise EigenSolverError(
             "a non-positive elastic eigenvalue appeared: the structure is not restrained "
-            "(check that every flexible link is attached to the ground through joints)"
+            "(check that every flexible link is attached to the ground through joints, "
+            "and that every joint spring has a positive stiffness)"
         )
     return lam
 
@@ -137,21 +161,24 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
     terms = model.pose_terms(q[None])
     M, K = model.matrices_from_terms(terms, y, 1)
     M, K = M[0], K[0]
-    nx = model.nx
     Mred, Kxx = reduced(model, M, K)
-    k = nx if n_modes is None else min(int(n_modes), nx)
-    lam, phix = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[0, k - 1] if k else None)
-    if model.nv:
-        phiq = -np.linalg.solve(M[nx:, nx:], M[nx:, :nx] @ phix)
-    else:
-        phiq = np.zeros((0, k))
-    shapes = np.vstack([phix, phiq])
+    ne = model.n_elastic
+    k = ne if n_modes is None else min(int(n_modes), ne)
+    lam, phie = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[0, k - 1] if k else None)
+    shapes = np.zeros((model.ndof, k))
+    e, r = model._elastic_cols, model._rigid_cols
+    shapes[e] = phie
+    if r.size:
+        Mi = M if model._joints_plain else relative_joint_values(model, M, K)[0]
+        shapes[r] = -np.linalg.solve(Mi[np.ix_(r, r)], Mi[np.ix_(r, e)] @ phie)
+    if model._modal_Winv is not None:
+        shapes[model.nx:] = model._modal_Winv @ shapes[model.nx:]
     # sign: largest elastic component positive
-    idx = np.argmax(np.abs(phix), axis=0)
-    shapes *= np.sign(phix[idx, np.arange(k)])[None, :]
+    idx = np.argmax(np.abs(phie), axis=0)
+    shapes *= np.sign(phie[idx, np.arange(k)])[None, :]
     positions, motion, elastic = node_fields(model, q, shapes, terms)
     return ModalResult(
-        q=q, y=y, ndof=model.ndof, rigid_modes=model.nv, eigvals=lam, shapes=shapes,
+        q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
     )
 
@@ -164,6 +191,9 @@ def node_fields(model, q: np.ndarray, shapes: np.ndarray, terms=None):
     if terms is None:
         terms = model.pose_terms(q[None])
     twist = model._root_twists(terms, BatchAlgebra(1))
+    T = joints.transform(model, terms, BatchAlgebra(1), twist)
+    if T is not None:  # locked joints: back to [x; q_all]
+        shapes = T[0] @ shapes
     pin.framesForwardKinematics(model.model, model.data, model.pin_configuration(q))
     positions, motion, elastic = {}, {}, {}
     nx = model.nx

@@ -34,6 +34,7 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex.description import RobotDescription, load
+from pinflex.erls import joints as joint_conditions
 from pinflex.erls import modal, plan
 from pinflex.erls.terms import (
     BatchAlgebra,
@@ -76,6 +77,12 @@ class FlexibleModel:
             beams normal to it).
         values: Overrides of point-mass values ``{name: kg}`` (checked against bounds).
         coordinates: 'relative' or 'absolute' to override the description's convention.
+        joints: Joint conditions: 'free' (default, paper 000: no joint stiffness, one rigid
+            mode per joint), 'locked' (every joint held rigidly), 'annotated' (the file's
+            ``<pinflex:joint>`` springs and locks, other joints free), or a mapping
+            ``{joint: 'free' | 'locked' | stiffness}``. See :mod:`pinflex.erls.joints`:
+            matrices are over the modal coordinates ``[x; q_kept]`` (locked joints'
+            coordinates eliminated) and ``n_rigid`` counts the free joints.
     """
 
     def __init__(
@@ -85,6 +92,7 @@ class FlexibleModel:
         planar: bool = False,
         values: dict[str, float] | None = None,
         coordinates: str | None = None,
+        joints=None,
     ):
         if not isinstance(description, RobotDescription):
             description = load(description)
@@ -117,6 +125,7 @@ class FlexibleModel:
         for name, value in (values or {}).items():
             self.set_value(name, value)
         plan.build_plan(self)
+        joint_conditions.setup(self, joints)
 
     @classmethod
     def from_pinocchio(
@@ -348,7 +357,8 @@ class FlexibleModel:
         Returns:
             ``M0`` (b, nd, nd), ``Mdesign`` (ny, b, nd, nd), ``K`` (b, nd, nd).
         """
-        nd, nx = self.ndof, self.nx
+        nx = self.nx
+        nd = nx + self.nv  # [x; q_all]; joint conditions map to the modal coordinates
         twist = self._root_twists(terms, alg)
         M = None
         K = None
@@ -386,7 +396,7 @@ class FlexibleModel:
         Kfull = np.zeros(M.shape)
         if K is not None:
             Kfull[..., :nx, :nx] = K
-        return M, Mdesign, Kfull
+        return joint_conditions.apply(self, terms, alg, twist, M, Mdesign, Kfull)
 
     def _root_twists(self, terms: _PoseTerms, alg) -> dict:
         """Elastic twist of every link root in link axes, (b, 6, nx), or None when zero."""
@@ -440,6 +450,58 @@ class FlexibleModel:
         """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs."""
         M0, Md, K = self.assemble(terms, BatchAlgebra(n_poses))
         return add_design_masses(M0, Md, y), K
+
+    # ------------------------------------------------------------------ joint conditions
+    @property
+    def n_elastic(self) -> int:
+        """Number of non-rigid modes: elastic coordinates plus spring-held joints."""
+        return self.ndof - self.n_rigid
+
+    @property
+    def joint_switch(self) -> str:
+        """The joint conditions in one word: 'free', 'locked', or 'annotated' when mixed."""
+        kinds = {c.kind for c in self.joint_conditions}
+        if kinds <= {"free"}:
+            return "free"
+        if kinds == {"locked"}:
+            return "locked"
+        return "annotated"
+
+    def joint_labels(self) -> dict[str, str]:
+        """``{joint: 'free' | 'locked' | 'k=...'}`` for reports and JSON outputs."""
+        return {c.name: c.label() for c in self.joint_conditions}
+
+    def joint_transform(self, q) -> np.ndarray:
+        """``T`` (nx + nv, ndof): ``[x; q_all] = T [x; q_kept]`` at pose ``q``.
+
+        The identity when no joint is locked; the rows of a locked joint give its coordinate
+        as the parent attachment's elastic motion along the joint axis.
+        """
+        q = self.check_q(q)
+        if q.ndim != 1:
+            raise ConfigurationError("joint_transform() takes one pose")
+        terms = self.pose_terms(q[None])
+        alg = BatchAlgebra(1)
+        T = joint_conditions.transform(self, terms, alg, self._root_twists(terms, alg))
+        return np.eye(self.ndof) if T is None else T[0]
+
+    def full_shapes(self, q, shapes: np.ndarray) -> np.ndarray:
+        """Shapes over the modal coordinates (ndof, k) as ``[x; q_all]`` (nx + nv, k)."""
+        return shapes if self._joints_plain else self.joint_transform(q) @ shapes
+
+    def relative_motion_rows(self, q) -> np.ndarray:
+        """``G`` (nv, nx + nv): the joints' physical relative motion ``r = G [x; q_all]``.
+
+        ``r_j = (C q)_j − aᵀθ_parent``: the motion between the parent's deformed attachment
+        and the child along the joint axis [rad or m] (see :mod:`pinflex.erls.joints`).
+        """
+        q = self.check_q(q)
+        if q.ndim != 1:
+            raise ConfigurationError("relative_motion_rows() takes one pose")
+        terms = self.pose_terms(q[None])
+        alg = BatchAlgebra(1)
+        return joint_conditions.relative_motion_rows(self, terms, alg,
+                                                     self._root_twists(terms, alg))[0]
 
     # ------------------------------------------------------------------ modal analysis
     def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True):

@@ -341,11 +341,11 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         RepeatedEigenvalue: a requested mode is (nearly) repeated at the expansion point.
     """
     modes = tuple(int(m) for m in np.atleast_1d(modes))
-    if min(modes) < 1 or max(modes) > model.nx:
-        raise ConfigurationError(f"modes {modes} must lie in 1..{model.nx}")
+    if min(modes) < 1 or max(modes) > model.n_elastic:
+        raise ConfigurationError(f"modes {modes} must lie in 1..{model.n_elastic}")
     space, M, K, jidx, didx = matrix_jets(model, q0, y0, order=order, joints=joints,
                                           design=design)
-    idx = [model.nv + m - 1 for m in modes]
+    idx = [model.n_rigid + m - 1 for m in modes]
     try:
         w, V = sla.eigh(K[0], M[0], check_finite=False)
     except np.linalg.LinAlgError as exc:
@@ -356,7 +356,7 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
     big = np.argmax(np.abs(V), axis=0)
     V = V * np.sign(V[big, np.arange(V.shape[1])])
     lam, _ = eigen_jets(space, M, K, idx, eigvals0=w, eigvecs0=V)
-    elastic = slice(model.nv, None)
+    elastic = slice(model.n_rigid, None)
     slopes = spectrum_slopes(space, M, K, w[elastic], V[:, elastic])
     tm = TaylorModel(
         space=space,

@@ -107,9 +107,9 @@ def mode_preview(
         mode) and ``amplitude_m``.
     """
     q = np.zeros(model.nv) if q is None else model.check_q(q)
-    if int(mode) != mode or not 1 <= mode <= model.nx:
+    if int(mode) != mode or not 1 <= mode <= model.n_elastic:
         raise ConfigurationError(
-            f"mode {mode!r} does not exist: the model has elastic modes 1..{model.nx}"
+            f"mode {mode!r} does not exist: the model has elastic modes 1..{model.n_elastic}"
         )
     if int(frames) < 4:
         raise ConfigurationError(f"frames = {frames!r}: an oscillation needs at least 4 frames")

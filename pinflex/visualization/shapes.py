@@ -142,7 +142,7 @@ def link_twists(model: FlexibleModel, q: np.ndarray, shapes: np.ndarray) -> dict
     Args:
         model: The flexible model.
         q: Pose (user coordinates).
-        shapes: Mode shapes over ``[x; q]``, (ndof, k).
+        shapes: Mode shapes over the model's modal coordinates ``[x; q_kept]``, (ndof, k).
 
     Returns:
         Per link a (k, 6) array ``(δp, θ)``: translation of the link origin and rotation of the
@@ -150,6 +150,7 @@ def link_twists(model: FlexibleModel, q: np.ndarray, shapes: np.ndarray) -> dict
     """
     q = model.check_q(q)
     nx = model.nx
+    shapes = model.full_shapes(q, shapes)  # locked joints' coordinates back in
     terms = model.pose_terms(q[None])
     roots = model._root_twists(terms, BatchAlgebra(1))
     data = model.model.createData()

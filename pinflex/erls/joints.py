@@ -1,0 +1,236 @@
+"""Joint conditions of an ERLS model: free joints, joint springs and locked joints.
+
+A moving joint is one of
+
+* **free** (paper 000): the joint coordinate has no stiffness; each free joint gives one rigid
+  (zero-frequency) mode;
+* a **spring** of stiffness ``k`` [N m/rad revolute, N/m prismatic] on the joint's *physical*
+  relative motion. A servo or gearbox holding a joint is modelled this way;
+* **locked**: the child's root follows the parent's deformed attachment rigidly.
+
+The physical relative motion. With the unique-ERLS rule the child's root drops the elastic
+dof along the joint axis, so the ERLS coordinate ``q_j`` is the child's motion relative to the
+parent's *undeformed* attachment frame. The parent attachment itself moves elastically by the
+twist ``τ`` (in parent link axes); its component along the joint axis ``a`` (the rotation for
+a revolute joint, the translation for a prismatic one) is ``aᵀθ_parent``. The relative motion
+is therefore, to first order,
+
+    r_j = (C q)_j − aᵀθ_parent(x)
+
+(``C`` maps user coordinates to relative joint values, the identity unless the file uses
+absolute angles). ``aᵀθ_parent`` is linear in the elastic coordinates ``x`` and, through the
+rotations of the joints between the parent and the last flexible link, may depend on the pose.
+It is zero on the ground and on a parent whose attachment does not deform.
+
+* A spring adds ``k r_j²`` to the strain energy: ``K += k gᵀ g`` with ``g = ∂r_j/∂[x; q]``,
+  which couples ``x`` and ``q``. No preload: the spring is at rest in the pose analysed.
+* A lock imposes ``r_j = 0``: the locked joints' coordinates are eliminated,
+  ``[x; q] = T [x; q_kept]`` with ``q_L = C_LL⁻¹ (Gₓ x − C_LK q_kept)``, and ``M``, ``K``
+  become ``Tᵀ M T``, ``Tᵀ K T``. It is the limit ``k → ∞`` of the spring.
+
+The assembly works on the *modal coordinates* ``[x; q_kept]``: the elastic coordinates and the
+user coordinates of the joints that are not locked (``FlexibleModel.kept_joints``). Springs
+turn their joints' coordinates into elastic ones: the modal problem condenses only the free
+joints' coordinates out, and the number of rigid modes is the number of free joints. (With
+absolute user coordinates it does so in relative joint values, where free joints carry no
+stiffness; the shapes are reported in the user coordinates.)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from pinflex.exceptions import ConfigurationError, InvalidBeamProperty, JointNotFound
+
+JOINT_SWITCHES = ("free", "locked", "annotated")
+
+
+@dataclass(frozen=True)
+class JointCondition:
+    """The condition of one moving joint in a model.
+
+    Attributes:
+        name: Joint name.
+        kind: 'free', 'spring' or 'locked'.
+        stiffness: Spring stiffness [N m/rad or N/m]; 0 when free, ``inf`` when locked.
+    """
+
+    name: str
+    kind: str
+    stiffness: float
+
+    def label(self) -> str:
+        """Short text: ``free``, ``locked`` or ``k=1.2e+04``."""
+        return self.kind if self.kind != "spring" else f"k={self.stiffness:.3g}"
+
+
+def resolve(model, joints) -> tuple[JointCondition, ...]:
+    """Conditions of the model's moving joints from the ``joints`` switch.
+
+    Args:
+        joints: 'free' (default), 'locked', 'annotated' (the file's ``<pinflex:joint>``
+            elements; unannotated joints are free), or a mapping ``{joint: 'free' | 'locked'
+            | stiffness}`` (unnamed joints are free).
+    """
+    names = model.joint_names
+    if joints is None:
+        joints = "free"
+    if isinstance(joints, str):
+        if joints not in JOINT_SWITCHES:
+            raise ConfigurationError(
+                f"joints='{joints}': expected one of {', '.join(JOINT_SWITCHES)} or a mapping "
+                "{joint: 'free' | 'locked' | stiffness}"
+            )
+        if joints == "free":
+            return tuple(JointCondition(n, "free", 0.0) for n in names)
+        if joints == "locked":
+            return tuple(JointCondition(n, "locked", np.inf) for n in names)
+        spec: dict = {}
+        for name, a in model.description.joint_annotations.items():
+            if a.locked:
+                spec[name] = "locked"
+            elif a.stiffness is not None:
+                spec[name] = a.stiffness
+    elif isinstance(joints, Mapping):
+        spec = dict(joints)
+    else:
+        raise ConfigurationError(
+            f"joints={joints!r}: expected 'free', 'locked', 'annotated' or a mapping"
+        )
+    for name in spec:
+        if name not in names:
+            raise JointNotFound(name, names)
+    out = []
+    for n in names:
+        v = spec.get(n, "free")
+        if isinstance(v, str):
+            if v not in ("free", "locked"):
+                raise ConfigurationError(
+                    f"joint '{n}': condition '{v}' must be 'free', 'locked' or a stiffness"
+                )
+            out.append(JointCondition(n, v, 0.0 if v == "free" else np.inf))
+            continue
+        k = float(v)
+        if not np.isfinite(k) or k <= 0.0:
+            raise InvalidBeamProperty(
+                f"joint '{n}': stiffness = {v!r} must be a positive finite number "
+                "[N m/rad or N/m]; use 'free' or 'locked' for the limits"
+            )
+        out.append(JointCondition(n, "spring", k))
+    return tuple(out)
+
+
+def setup(model, joints) -> None:
+    """Lay out the modal coordinates for the joint conditions (after the elastic layout)."""
+    conds = resolve(model, joints)
+    model.joint_conditions = conds
+    nv, nx = model.nv, model.nx
+    locked = [i for i, c in enumerate(conds) if c.kind == "locked"]
+    kept = [i for i, c in enumerate(conds) if c.kind != "locked"]
+    model.kept_joints = tuple(model.joint_names[i] for i in kept)
+    model.n_rigid = sum(c.kind == "free" for c in conds)
+    model.ndof = nx + len(kept)
+    modal_col = {j: nx + k for k, j in enumerate(kept)}
+    model._rigid_cols = np.array([modal_col[i] for i, c in enumerate(conds) if c.kind == "free"],
+                                 dtype=int)
+    model._elastic_cols = np.concatenate(
+        [np.arange(nx), [modal_col[i] for i, c in enumerate(conds) if c.kind == "spring"]]
+    ).astype(int)
+    by_col = {j.user_col: j for j in model._joints if j.user_col >= 0}
+    model._spring_joints = tuple(
+        (by_col[i], c.stiffness) for i, c in enumerate(conds) if c.kind == "spring"
+    )
+    model._locked_joints = tuple(by_col[i] for i in locked)
+    C = model.coord_map
+    if locked:
+        CLL = C[np.ix_(locked, locked)]
+        CLK = C[np.ix_(locked, kept)]
+        inv = np.linalg.inv(CLL)  # C is unit lower triangular: the block is invertible
+        T0 = np.zeros((nx + nv, model.ndof))
+        T0[:nx, :nx] = np.eye(nx)
+        T0[nx + np.array(kept, dtype=int), nx + np.arange(len(kept))] = 1.0
+        T0[np.ix_(nx + np.array(locked), nx + np.arange(len(kept)))] = -inv @ CLK
+        model._lock_T0 = T0
+        model._lock_inv = inv
+        model._lock_rows = nx + np.array(locked, dtype=int)
+    model._joints_plain = not model._spring_joints and not locked
+    # Free joints carry no stiffness in *relative* joint values; with absolute user
+    # coordinates a spring on one joint couples its neighbours' user coordinates. The modal
+    # reduction therefore works in [x; r_kept] with r_kept = W q_kept (x = 0 in the locks).
+    model._modal_Winv = None
+    if not model._joints_plain:
+        Tq = np.zeros((nv, len(kept)))
+        Tq[kept, np.arange(len(kept))] = 1.0
+        if locked:
+            Tq[locked] = -model._lock_inv @ C[np.ix_(locked, kept)]
+        W = (C @ Tq)[kept]
+        if not np.allclose(W, np.eye(len(kept)), rtol=0.0, atol=1e-14):
+            model._modal_Winv = np.linalg.inv(W)
+
+
+def parent_rows(model, terms, alg, twist, joints_) -> np.ndarray:
+    """``∂(aᵀθ_parent)/∂x`` of the given joints, (b, len(joints_), nx) in the algebra."""
+    rows = []
+    for j in joints_:
+        tau = model._twist_at(alg, j.attach, twist[j.parent])
+        if tau is None:
+            rows.append(None)
+            continue
+        a = j.R_o @ j.axis  # the joint axis in parent link axes (fixed by the joint rotation)
+        part = tau[..., 3:, :] if j.kind == "revolute" else tau[..., :3, :]
+        rows.append(np.einsum("i,...ix->...x", a, part))
+    ref = next((r for r in rows if r is not None), None)
+    if ref is None:
+        return alg.const(np.zeros((len(joints_), model.nx)))
+    return np.stack([np.zeros_like(ref) if r is None else r for r in rows], axis=-2)
+
+
+def transform(model, terms, alg, twist):
+    """``T`` (b, nx + nv, ndof) from modal coordinates to ``[x; q_all]``, or None if no lock."""
+    if not model._locked_joints:
+        return None
+    gx = parent_rows(model, terms, alg, twist, model._locked_joints)
+    T = alg.const(model._lock_T0).copy()
+    T[..., model._lock_rows, : model.nx] += np.einsum("lm,...mx->...lx", model._lock_inv, gx)
+    return T
+
+
+def apply(model, terms, alg, twist, M, Mdesign, K):
+    """Add the joint springs to ``K`` and eliminate locked joints (see the module docstring).
+
+    ``M``, ``K`` (b, nx + nv, nx + nv) and ``Mdesign`` (ny, b, ...) come from the assembly in
+    ``[x; q_all]``; the result is over the modal coordinates ``[x; q_kept]``.
+    """
+    if model._joints_plain:
+        return M, Mdesign, K
+    if model._spring_joints:
+        gx = parent_rows(model, terms, alg, twist, [j for j, _ in model._spring_joints])
+        for s, (j, k) in enumerate(model._spring_joints):
+            g = np.concatenate(
+                [-gx[..., s : s + 1, :], alg.const(model.coord_map[j.user_col][None, :])],
+                axis=-1,
+            )
+            K = K + k * alg.mm(np.swapaxes(g, -1, -2), g)
+    T = transform(model, terms, alg, twist)
+    if T is not None:
+        Tt = np.swapaxes(T, -1, -2)
+        M = alg.mm(Tt, alg.mm(M, T))
+        K = alg.mm(Tt, alg.mm(K, T))
+        Mdesign = np.stack([alg.mm(Tt, alg.mm(Md, T)) for Md in Mdesign]) if len(Mdesign) else (
+            np.zeros((0,) + M.shape)
+        )
+    return M, Mdesign, K
+
+
+def relative_motion_rows(model, terms, alg, twist) -> np.ndarray:
+    """Rows ``G`` (b, nv, nx + nv): physical relative joint motion ``r = G [x; q_all]``."""
+    by_col = {j.user_col: j for j in model._joints if j.user_col >= 0}
+    ordered = [by_col[i] for i in range(model.nv)]
+    gx = parent_rows(model, terms, alg, twist, ordered) if ordered else None
+    C = alg.const(model.coord_map)
+    if gx is None:
+        return C[..., :0, :]
+    return np.concatenate([-gx, C], axis=-1)
