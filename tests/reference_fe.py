@@ -326,6 +326,7 @@ def planar_chain_matrices(
         EA: axial stiffness [N], scalar or one per link.
         end_masses: point mass [kg] at the distal end node of each link (translational
             inertia only, both directions); default none.
+        joints: joint conditions, see above.
 
     Returns:
         ``(K, M)`` of shape (n, n), n = 3 * sum(n_elements) + len(angles).

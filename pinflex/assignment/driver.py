@@ -104,6 +104,7 @@ class AssignmentResult:
             the exact model after the polynomial alone refused them).
         floor_margin_hz: Smallest exact margin of the floors after (tracked modes) [Hz];
             negative when a floor is violated on the exact model.
+        joints: The joint conditions the assignment was made under (``{joint: label}``).
     """
 
     found: bool
@@ -131,6 +132,7 @@ class AssignmentResult:
     events: tuple = ()
     floors_model: str = ""
     floor_margin_hz: float | None = None
+    joints: dict[str, str] = field(default_factory=dict)
 
 
 def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
@@ -408,6 +410,7 @@ def assign_frequencies(
         events=events,
         floors_model=floors_model,
         floor_margin_hz=margin,
+        joints=model.joint_labels(),
     )
 
 

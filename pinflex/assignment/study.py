@@ -4,6 +4,8 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped in ``
 
     robot = "builtin:two_link.urdf"
     planar = true
+    joints = "free"                # or "locked", "annotated" (the file's <pinflex:joint>)
+    values = { m1 = 0.1 }          # parameters and point masses set before the study
 
     [trajectory]
     builtin = "benchmark_a"        # or: csv = "traj.csv" (columns t, then joints, in the
@@ -107,10 +109,13 @@ class AssignmentConfig:
     refine: bool = False
     report_modes: list[int] = field(default_factory=lambda: [2, 3, 4])
     folder: Path = Path(".")
+    joints: str = "free"
+    values: dict | None = None
 
     def build_model(self) -> FlexibleModel:
         """The flexible model of the study."""
-        return FlexibleModel(self.robot, planar=self.planar)
+        return FlexibleModel(self.robot, planar=self.planar, joints=self.joints,
+                             values=self.values)
 
     def build_trajectory(self, model: FlexibleModel) -> Trajectory:
         """The study's trajectory in the model's user coordinates."""
@@ -149,7 +154,8 @@ def load_config(path: str | Path) -> AssignmentConfig:
     exp = data.get("expansion", {})
     cons = data.get("constraints", {})
     opts = data.get("options", {})
-    known = {"robot", "planar", "trajectory", "expansion", "targets", "constraints", "options"}
+    known = {"robot", "planar", "trajectory", "expansion", "targets", "constraints", "options",
+             "joints", "values"}
     unknown = set(data) - known
     if unknown:
         raise ConfigurationError(
@@ -172,6 +178,8 @@ def load_config(path: str | Path) -> AssignmentConfig:
         refine=bool(opts.get("refine", False)),
         report_modes=[int(m) for m in opts.get("report_modes", [2, 3, 4])],
         folder=folder,
+        joints=str(data.get("joints", "free")),
+        values=dict(data["values"]) if "values" in data else None,
     )
 
 

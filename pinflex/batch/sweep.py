@@ -18,7 +18,8 @@ Sweepable keys: ``robot``, ``planar``, ``trajectory.builtin``, ``trajectory.csv`
 ``expansion.{order, quantity, q0}``, ``expansion.y0.NAME``, ``targets.I.{mode, freq_hz, weight}``,
 ``constraints.mass_budget_kg``, ``constraints.floors.I.{mode, freq_hz}``,
 ``constraints.bands.I.{mode, low_hz, high_hz}``, ``options.refine``, ``options.baseline.NAME``,
-``options.report_modes``.
+``options.report_modes``, ``joints`` (free, locked, annotated), ``values.NAME`` (a parameter
+or point mass).
 
 A case is identified by the hash of the study file's text, the text of the files it reads
 (robot description, trajectory CSV) and its overrides, so editing the study or adding a value
@@ -50,7 +51,7 @@ _KEYS = (
     r"expansion\.y0\.\w+", r"targets\.\d+\.(mode|freq_hz|weight)",
     r"constraints\.mass_budget_kg", r"constraints\.floors\.\d+\.(mode|freq_hz)",
     r"constraints\.bands\.\d+\.(mode|low_hz|high_hz)", r"options\.refine",
-    r"options\.baseline\.\w+", r"options\.report_modes",
+    r"options\.baseline\.\w+", r"options\.report_modes", r"joints", r"values\.\w+",
 )
 SWEEPABLE = ("robot", "planar", "trajectory.builtin", "trajectory.csv", "expansion.order",
              "expansion.quantity", "expansion.q0", "expansion.y0.NAME",
@@ -58,7 +59,7 @@ SWEEPABLE = ("robot", "planar", "trajectory.builtin", "trajectory.csv", "expansi
              "constraints.mass_budget_kg", "constraints.floors.I.mode",
              "constraints.floors.I.freq_hz", "constraints.bands.I.mode",
              "constraints.bands.I.low_hz", "constraints.bands.I.high_hz", "options.refine",
-             "options.baseline.NAME", "options.report_modes")
+             "options.baseline.NAME", "options.report_modes", "joints", "values.NAME")
 
 
 def split_values(text: str) -> list[str]:
@@ -181,6 +182,10 @@ def apply_overrides(cfg, overrides: dict):
                 cfg.baseline = dict(cfg.baseline or {}, **{parts[2]: float(value)})
             elif key == "options.report_modes":
                 cfg.report_modes = [int(m) for m in np.atleast_1d(value)]
+            elif key == "joints":
+                cfg.joints = str(value)
+            elif parts[0] == "values":
+                cfg.values = dict(cfg.values or {}, **{parts[1]: float(value)})
             else:  # pragma: no cover - parse_sweeps admits only the keys above
                 raise InvalidSweep(f"--sweep key {key!r} is not sweepable")
         except (TypeError, ValueError) as exc:

@@ -6,6 +6,8 @@ import argparse
 import json
 import time
 
+from pinflex.cli.common import add_model_arguments, parse_values
+
 
 def add_parser(sub) -> None:
     """Register the ``assign`` subcommand on an ``argparse`` subparsers object."""
@@ -21,6 +23,7 @@ def add_parser(sub) -> None:
     p.add_argument("--parquet", default=None, metavar="FILE",
                    help="the same table as Parquet (needs pyarrow)")
     p.add_argument("--html", default=None, metavar="FILE", help="write an HTML preview")
+    add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_assign)
 
 
@@ -43,6 +46,7 @@ def summary(result, total_s: float) -> dict:
         "refinements": result.refinements,
         "timings_s": result.timings_s,
         "total_time_s": total_s,
+        "joints": dict(result.joints),
     }
 
 
@@ -65,6 +69,10 @@ def cmd_assign(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     cfg = load_config(args.config)
+    if args.joints is not None:
+        cfg.joints = args.joints
+    if args.set:
+        cfg.values = {**(cfg.values or {}), **parse_values(args.set)}
     model, traj, result = run_config(cfg)
     total = time.perf_counter() - t0
     data = assignment_data(model, traj, result)
@@ -87,6 +95,7 @@ def cmd_assign(args: argparse.Namespace) -> int:
         print(json.dumps(out))
         return 0
     print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
+    print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
     print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
           f"{100 * result.max_error_after:.2f} % "
           f"(predicted {100 * result.predicted_max_error_after:.2f} %)"

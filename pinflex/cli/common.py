@@ -22,12 +22,35 @@ def parse_values(items: Sequence[str] | None) -> dict[str, float]:
     return out
 
 
+JOINT_CHOICES = ("free", "locked", "annotated")
+
+
+def add_model_arguments(p: argparse.ArgumentParser, *, default_joints: str | None = "free",
+                        with_set: bool = True) -> None:
+    """``--joints`` (and ``--set``) of every command that builds a flexible model.
+
+    ``default_joints=None`` leaves the choice to the command's input (a study file).
+    """
+    p.add_argument("--joints", choices=JOINT_CHOICES, default=default_joints,
+                   help="joint conditions: free (no joint stiffness, paper 000), locked (every "
+                   "joint held rigidly), or annotated (the file's <pinflex:joint> springs and "
+                   "locks)" + (f" (default: {default_joints})" if default_joints else ""))
+    if with_set:
+        p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                       help="set a parameter or point mass (repeatable)")
+
+
+def joints_text(model) -> str:
+    """One line naming the model's joint conditions, e.g. ``joints: q1 free, q2 k=1e+03``."""
+    labels = model.joint_labels()
+    return "joints: " + ", ".join(f"{n} {v}" for n, v in labels.items())
+
+
 def add_robot_arguments(p: argparse.ArgumentParser) -> None:
-    """The robot file, pose, point masses and planar switch of ``modes`` and ``view``."""
+    """The robot file, pose, parameters, joints and planar switch of ``modes`` and ``view``."""
     p.add_argument("urdf", help="annotated URDF (or pinflex overlay) file")
     p.add_argument("--q", type=float, nargs="+", metavar="V",
                    help="joint values, one per moving joint, in the file's convention "
                    "(default: zeros)")
-    p.add_argument("--set", action="append", metavar="NAME=VALUE",
-                   help="set a point mass [kg] (repeatable)")
+    add_model_arguments(p)
     p.add_argument("--planar", action="store_true", help="keep in-plane elastic dofs only")

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from pinflex.cli.assign import summary, write_preview
+from pinflex.cli.common import add_model_arguments, joints_text, parse_values
 
 PAPER = {
     "taylor_traj_full": 0.09, "taylor_traj_lin": 1.64,
@@ -29,6 +30,7 @@ def add_parser(sub) -> None:
                    help="HTML preview file (default: OUT/preview.html)")
     d.add_argument("--no-brute-force", action="store_true",
                    help="skip the exact grid search that checks the QP's answer")
+    add_model_arguments(d)
     d.set_defaults(func=cmd_demo)
 
 
@@ -48,13 +50,16 @@ def cmd_demo(args: argparse.Namespace) -> int:
         print(msg, file=log, flush=True)
 
     t_all = time.perf_counter()
-    model = FlexibleModel(builtin_path("two_link.urdf"), planar=True)
+    model = FlexibleModel(builtin_path("two_link.urdf"), planar=True, joints=args.joints,
+                          values=parse_values(args.set))
     traj = user_trajectory(model, "benchmark_a")
     q0 = np.array([1.817, 5.312])
     y0 = model.y0
     say("pinflex demo: benchmark A (paper 000), planar two-link flexible arm")
-    say(f"  {model.ndof} dof = {model.nx} elastic + {model.nv} rigid; q0 = {q0.tolist()} rad "
-        "(absolute link angles); y0 = m1, m2 = 0.125 kg")
+    say(f"  {model.ndof} dof = {model.nx} elastic + {model.ndof - model.nx} joint "
+        f"({model.n_rigid} rigid modes); q0 = {q0.tolist()} rad (absolute link angles); "
+        f"y0 = {', '.join(f'{d.name} = {d.nominal:g}' for d in model.design)}")
+    say(f"  {joints_text(model)}")
     modal = model.modes(q0, y0, n_modes=4)
     say("  modes at (q0, y0): " + ", ".join(f"{f:.2f}" for f in modal.freq_hz) + " Hz")
 

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, parse_values
+from pinflex.cli.common import add_robot_arguments, joints_text, parse_values
 
 
 def add_parser(sub) -> None:
@@ -28,7 +28,8 @@ def cmd_modes(args: argparse.Namespace) -> int:
     """Run ``pinflex modes``."""
     from pinflex.erls import FlexibleModel
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set))
+    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
+                          joints=args.joints)
     if args.trajectory is not None:
         return _along(model, args)
     if args.csv or args.png:
@@ -49,12 +50,16 @@ def cmd_modes(args: argparse.Namespace) -> int:
             "ndof": model.ndof,
             "elastic_dof": model.nx,
             "rigid_modes": result.rigid_modes,
+            "joint_condition": model.joint_switch,
+            "joints": model.joint_labels(),
             "frequencies_hz": freqs.tolist(),
         }
         print(json.dumps(out))
         return 0
-    print(f"{model.description.name}: {model.ndof} dof ({model.nx} elastic + {model.nv} rigid), "
-          f"{'planar' if model.planar else 'spatial'}, {model.coordinates} joint coordinates")
+    print(f"{model.description.name}: {model.ndof} dof ({model.nx} elastic + "
+          f"{model.ndof - model.nx} joint), {'planar' if model.planar else 'spatial'}, "
+          f"{model.coordinates} joint coordinates")
+    print(joints_text(model))
     print("q = " + ", ".join(f"{n}={v:.6g}" for n, v in zip(model.joint_names, q)))
     if model.ny:
         values = ", ".join(f"{d.name}={v:.6g} kg" for d, v in zip(model.design, result.y))

@@ -37,7 +37,8 @@ def cmd_view(args: argparse.Namespace) -> int:
     from pinflex.erls import FlexibleModel
     from pinflex.visualization import mode_preview, served_visualizer
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set))
+    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
+                          joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)
     if args.html:
         preview = mode_preview(model, q, args.mode, amplitude_m=args.amplitude)

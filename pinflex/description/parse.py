@@ -11,8 +11,8 @@ from pinflex import beam
 from pinflex.description.overlay import apply_overlay, resolve_base
 from pinflex.description.types import (
     _NS,
-    SUPPORTED_JOINTS,
     MOVING_JOINTS,
+    SUPPORTED_JOINTS,
     FlexibleLink,
     Joint,
     JointAnnotation,
@@ -23,8 +23,8 @@ from pinflex.description.types import (
 from pinflex.exceptions import (
     InvalidBeamProperty,
     InvalidDescription,
-    LinkNotFound,
     JointNotFound,
+    LinkNotFound,
     UnsupportedJoint,
 )
 

@@ -71,6 +71,7 @@ def resolve(model, joints) -> tuple[JointCondition, ...]:
     """Conditions of the model's moving joints from the ``joints`` switch.
 
     Args:
+        model: The model (its joint names and description).
         joints: 'free' (default), 'locked', 'annotated' (the file's ``<pinflex:joint>``
             elements; unannotated joints are free), or a mapping ``{joint: 'free' | 'locked'
             | stiffness}`` (unnamed joints are free).

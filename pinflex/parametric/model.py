@@ -42,6 +42,9 @@ class TaylorModel:
             variables' own units [rad, m or kg] (see :meth:`error_estimate`).
         spectrum: All non-rigid eigenvalues at the expansion point [rad²/s²], (m,).
         spectrum_slopes: Their first derivatives along each variable, (nvars, m).
+        freq_jets: Jets of the frequencies [Hz] (derived from ``eigval_jets`` by default).
+        joints: The model's joint conditions ``{joint: 'free' | 'locked' | 'k=...'}``; the
+            mode numbers count the non-rigid modes under these conditions.
     """
 
     space: JetSpace
@@ -55,6 +58,7 @@ class TaylorModel:
     freq_jets: np.ndarray | None = None
     spectrum: np.ndarray | None = None
     spectrum_slopes: np.ndarray | None = None
+    joints: dict[str, str] | None = None
 
     def __post_init__(self):
         if self.freq_jets is None:
@@ -369,6 +373,7 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         radius=np.full((space.nvars, len(modes)), np.inf),
         spectrum=w[elastic].copy(),
         spectrum_slopes=slopes,
+        joints=model.joint_labels(),
     )
     object.__setattr__(tm, "radius", _axis_radius(tm))
     return tm

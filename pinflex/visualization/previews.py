@@ -134,7 +134,8 @@ def mode_preview(
     qtext = ", ".join(f"{v:.4g}" for v in q)
     caption = (
         f"{model.description.name}: mode {mode} at {freq:.2f} Hz, q = [{qtext}] "
-        f"({model.coordinates}); peak displacement drawn {1000 * amplitude_m:.0f} mm, "
+        f"({model.coordinates}), joints {model.joint_switch}; peak displacement drawn "
+        f"{1000 * amplitude_m:.0f} mm, "
         f"one oscillation per {period_s:g} s"
     )
     describe_window(vis, title=f"pinflex: {model.description.name} mode {mode}",
@@ -205,11 +206,12 @@ def trajectory_preview(
         drawing.key(int(frame_of[i]), states[i], colours[i])
     writer.finish()
     if labels is None:
-        labels = [f"t = {t:.3f} s, mode {mode}: {f:.2f} Hz" for t, f in zip(times, freq)]
+        labels = [f"t = {t:.3f} s, mode {mode}: {f:.2f} Hz (joints {model.joint_switch})"
+                  for t, f in zip(times, freq)]
     timeline = {"times": (frame_of[keep] / fps).tolist(),
                 "labels": [labels[i] for i in np.flatnonzero(keep)]}
-    legend = {"label": f"mode {mode} frequency [Hz]", "low": low, "high": high,
-              "css": shapes.colormap_css()}
+    legend = {"label": f"mode {mode} frequency [Hz], joints {model.joint_switch}", "low": low,
+              "high": high, "css": shapes.colormap_css()}
     caption = labels[0]
     describe_window(vis, title=title or f"pinflex: {model.description.name} trajectory",
                     caption=caption, timeline=timeline, legend=legend)
@@ -245,6 +247,7 @@ def assignment_preview_html(model: FlexibleModel, traj, result, path: str | Path
         for t, fa, fb, ft in zip(traj.times_s, after, before, target)
     ]
     design = ", ".join(f"{k} = {v:.4g} kg" for k, v in result.design.items())
+    design += f"; joints {model.joint_switch}"
     preview = trajectory_preview(
         model, traj.times_s, traj.q, y=result.y, mode=mode, freq_hz=after, labels=labels,
         title=f"pinflex: assigned design {design}",
