@@ -252,3 +252,16 @@ def test_command_line_switch_and_json_carry_the_joint_condition(capsys):
     np.testing.assert_allclose(out["frequencies_hz"], f_ref[:2], rtol=1e-9)
     tm = pinflex.expand(_bench({"q1": K1}), Q0, order=2)
     assert tm.joints == {"q1": "k=4e+03", "q2": "free"}
+
+
+def test_linear_model_export_of_a_locked_elbow():
+    """The exported state-space model of a locked elbow has the locked frequencies."""
+    from pinflex.native.export import linear_model
+
+    model = _bench({"q2": "locked"})
+    data = linear_model(model, Q0)
+    assert data["A"].shape == (2 * model.ndof, 2 * model.ndof)
+    assert list(data["coordinates"][-1:]) == ["q1"]
+    w = np.sort(np.abs(np.linalg.eigvals(data["A"]).imag))[::2]  # ±iω pairs, rigid zeros
+    _, f_ref = planar_two_link_frequencies(Q0, 0.125, 0.125, joints=[None, "clamped"])
+    np.testing.assert_allclose(w[1:4] / (2 * np.pi), f_ref[:3], rtol=1e-7)

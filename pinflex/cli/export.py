@@ -32,7 +32,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     from pinflex.erls import FlexibleModel
     from pinflex.native.export import linear_model, save_linear_model
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set))
+    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
+                          joints=args.joints)
     times = None
     if args.trajectory:
         from pinflex.native.along import trajectory_for
@@ -49,5 +50,6 @@ def cmd_export(args: argparse.Namespace) -> int:
     path = save_linear_model(data, args.out)
     shape = "x".join(str(s) for s in data["A"].shape)
     print(f"wrote {path}: A {shape}, {model.ndof} coordinates ({model.nx} elastic + "
-          f"{model.nv} joints), {model.nv} inputs (joint torques)")
+          f"{model.ndof - model.nx} joints), {model.nv} inputs (joint torques); "
+          f"joints {model.joint_switch}")
     return 0

@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from pinflex.cli.common import parse_values
+from pinflex.cli.common import add_model_arguments, parse_values
 
 
 def add_parser(sub) -> None:
@@ -33,8 +33,7 @@ def add_parser(sub) -> None:
                    " or 'R,P,Y' roll-pitch-yaw [rad]")
     p.add_argument("--warn-limits", action="store_true",
                    help="warn instead of failing when a sample leaves the joint limits")
-    p.add_argument("--set", action="append", metavar="NAME=VALUE",
-                   help="set a point mass [kg] (repeatable)")
+    add_model_arguments(p)
     p.add_argument("--out", required=True, help="CSV file to write")
     p.set_defaults(func=cmd_path)
 
@@ -45,7 +44,7 @@ def cmd_path(args: argparse.Namespace) -> int:
     from pinflex.exceptions import ConfigurationError
     from pinflex.native.workspace import path_from_spec
 
-    model = FlexibleModel(args.urdf, values=parse_values(args.set))
+    model = FlexibleModel(args.urdf, values=parse_values(args.set), joints=args.joints)
     orientation: object = args.orientation
     if orientation not in ("free", "keep"):
         try:

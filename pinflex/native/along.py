@@ -220,8 +220,8 @@ def modes_along(
     mode_list = tuple(range(1, int(modes) + 1)) if np.ndim(modes) == 0 else tuple(
         int(m) for m in modes
     )
-    if not mode_list or min(mode_list) < 1 or max(mode_list) > arm.nx:
-        raise ConfigurationError(f"modes {mode_list} must lie in 1..{arm.nx}")
+    if not mode_list or min(mode_list) < 1 or max(mode_list) > arm.n_elastic:
+        raise ConfigurationError(f"modes {mode_list} must lie in 1..{arm.n_elastic}")
     tr = track_modes(arm, Q, y, modes=mode_list, extra=extra)
     sorted_all = np.sqrt(np.asarray(tr.sorted_eigvals)) / (2.0 * np.pi)
     k = len(mode_list)

@@ -34,20 +34,23 @@ from pinflex.exceptions import ConfigurationError
 def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh) -> dict:
     M, K = arm.matrices(q, y)
     nd, nv, nx = arm.ndof, arm.nv, arm.nx
+    nr = arm.n_rigid  # free joints (joint springs and locks: pinflex.erls.joints)
     if rayleigh is not None:
         alpha, beta = (float(v) for v in rayleigh)
         damping = alpha * M + beta * K
     else:
         damping = np.zeros_like(M)
     lam, phi = scipy.linalg.eigh(K, M)
-    # the elastic modes are the nx largest (the nv rigid ones have λ = 0)
-    lam_e, phi_e = lam[nv:], phi[:, nv:]
+    # the elastic modes are the largest ones (the free joints' rigid ones have λ = 0)
+    lam_e, phi_e = lam[nr:], phi[:, nr:]
     if zeta:
         w = np.sqrt(np.clip(lam_e, 0.0, None))
         MP = M @ phi_e
         damping = damping + MP @ np.diag(2.0 * zeta * w) @ MP.T
-    Bu = np.zeros((nd, nv))
+    Bu = np.zeros((nx + nv, nv))
     Bu[nx:, :] = arm.coord_map.T
+    if nd != nx + nv:  # locked joints: torques through [x; q_all] = T [x; q_kept]
+        Bu = arm.joint_transform(q).T @ Bu
     sol = np.linalg.solve(M, np.hstack([K, damping, Bu]))
     A = np.zeros((2 * nd, 2 * nd))
     A[:nd, nd:] = np.eye(nd)
@@ -87,7 +90,7 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None) -> dict:
     poses = [_one_pose(arm, qk, yv, zeta, rayleigh) for qk in np.atleast_2d(Q)]
     out = {k: (poses[0][k] if Q.ndim == 1 else np.stack([p[k] for p in poses]))
            for k in poses[0]}
-    coords = list(arm.x_names) + list(arm.joint_names)
+    coords = list(arm.x_names) + list(arm.kept_joints)
     out.update(
         coordinates=np.array(coords),
         states=np.array(coords + [f"d({c})/dt" for c in coords]),
