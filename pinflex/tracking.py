@@ -217,7 +217,7 @@ def eigenpairs(model, Q, y=None, *, n_modes: int | None = None, check_bounds: bo
     A = Li @ Kxx @ np.swapaxes(Li, -1, -2)
     A = 0.5 * (A + np.swapaxes(A, -1, -2))
     lam, Z = np.linalg.eigh(A)
-    k = model.nx if n_modes is None else min(int(n_modes), model.nx)
+    k = model.n_elastic if n_modes is None else min(int(n_modes), model.n_elastic)
     lam, Z = lam[:, :k], Z[:, :, :k]
     if not np.all(np.isfinite(lam)) or np.any(lam <= 0.0):
         raise EigenSolverError(
@@ -454,9 +454,9 @@ def track_modes(
     if Yb.shape[0] != ns:
         raise ConfigurationError(f"got {Yb.shape[0]} design vectors for {ns} samples")
     modes = tuple(int(m) for m in np.atleast_1d(modes))
-    if not modes or min(modes) < 1 or max(modes) > model.nx:
-        raise ConfigurationError(f"modes {modes} must lie in 1..{model.nx}")
-    n = min(model.nx, max(modes) + max(int(extra), 0))
+    if not modes or min(modes) < 1 or max(modes) > model.n_elastic:
+        raise ConfigurationError(f"modes {modes} must lie in 1..{model.n_elastic}")
+    n = min(model.n_elastic, max(modes) + max(int(extra), 0))
     lam, phi, mass = eigenpairs(model, Q, Yb, n_modes=n, check_bounds=check_bounds)
     start, start_shapes = 0, None
     if reference is not None and np.ndim(reference) == 0 and not isinstance(reference, tuple):

@@ -265,3 +265,15 @@ def test_linear_model_export_of_a_locked_elbow():
     w = np.sort(np.abs(np.linalg.eigvals(data["A"]).imag))[::2]  # ±iω pairs, rigid zeros
     _, f_ref = planar_two_link_frequencies(Q0, 0.125, 0.125, joints=[None, "clamped"])
     np.testing.assert_allclose(w[1:4] / (2 * np.pi), f_ref[:3], rtol=1e-7)
+
+
+def test_modes_along_a_motion_on_a_locked_arm_are_the_locked_frequencies():
+    """Mode tracking works on the modal coordinates of a locked arm."""
+    from pinflex.tracking import track_modes
+
+    model = _bench("locked")
+    Q = Q0 + np.linspace(0.0, 0.3, 5)[:, None] * np.array([0.0, 1.0])
+    tr = track_modes(model, Q, modes=(1, 2))
+    for q, lam in zip(Q, np.asarray(tr.eigvals)):
+        _, f_ref = planar_two_link_frequencies(q, 0.125, 0.125, joints=["clamped"] * 2)
+        np.testing.assert_allclose(np.sqrt(lam) / (2 * np.pi), f_ref[:2], rtol=1e-9)

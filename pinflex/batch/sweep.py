@@ -395,7 +395,7 @@ def run_assign_group(items: list) -> list[dict]:
             y_before = (model.check_y(cfg.baseline) if cfg.baseline is not None
                         else np.array([d.lower for d in model.design]))
             case_modes: list[int] = []
-            report = [m for m in cfg.report_modes if m <= model.nx]
+            report = [m for m in cfg.report_modes if m <= model.n_elastic]
             for m in [t.mode for t in cfg.targets] + report:
                 if int(m) not in case_modes:
                     case_modes.append(int(m))
