@@ -1,0 +1,40 @@
+"""Time simulation and frequency responses of flexible-link arms (paper 000 eq. 1).
+
+* :mod:`~pinflex.dynamics.terms`: the terms ``M, C, K, F`` of eq. (1) at a state;
+* :mod:`~pinflex.dynamics.motion`: joint motion through trajectory samples;
+* :mod:`~pinflex.dynamics.simulate`: prescribed joint motion and torque drive, integrators;
+* :mod:`~pinflex.dynamics.response`: a frame's deflection, peak, RMS, residual vibration.
+"""
+
+from pinflex.dynamics.motion import JointMotion
+from pinflex.dynamics.response import (
+    VibrationReport,
+    dominant_frequency,
+    frame_deflection,
+    locked_frequencies,
+    vibration_report,
+)
+from pinflex.dynamics.simulate import (
+    Damping,
+    Simulation,
+    SimulationError,
+    newmark,
+    simulate_prescribed,
+)
+from pinflex.dynamics.terms import EomTerms, ErlsDynamics
+
+__all__ = [
+    "Damping",
+    "EomTerms",
+    "ErlsDynamics",
+    "JointMotion",
+    "Simulation",
+    "SimulationError",
+    "VibrationReport",
+    "dominant_frequency",
+    "frame_deflection",
+    "locked_frequencies",
+    "newmark",
+    "simulate_prescribed",
+    "vibration_report",
+]

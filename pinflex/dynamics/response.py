@@ -1,0 +1,207 @@
+"""Outputs of a time simulation: a frame's elastic deflection, its peak, RMS, residual vibration.
+
+Deflection of a frame: the difference between the frame's position on the flexible arm and
+its position on a rigid arm at the same *physical* joint angles, in world axes,
+``δ = T(q) x + S(q) A x`` (``T`` the elastic translation of the point, ``S`` its ERLS Jacobian,
+``A x`` the elastic offset of the ERLS joint coordinates). It is what a camera fixed to the
+ground sees against the commanded motion.
+
+Metrics (all in metres, on ``|δ|``):
+
+* ``tip_peak_m``: the largest ``|δ|`` over the whole record;
+* ``tip_rms_m``: the RMS of ``|δ|`` from the start to the stop (along the motion);
+* ``residual_amplitude_m``: the largest ``|δ − δ_static|`` after the stop, ``δ_static`` the
+  static deflection at the final pose (zero without gravity);
+* ``dominant_frequency_hz``: the frequency of the residual vibration, from the largest peak of
+  the Hann-windowed, zero-padded spectrum of ``δ − δ_static`` projected on its principal
+  direction, refined by a least-squares fit of one sinusoid (with offset and exponential
+  decay) around that peak.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from pinflex.exceptions import ConfigurationError
+
+
+@dataclass(frozen=True)
+class VibrationReport:
+    """Deflection of a frame along a simulated motion and its metrics (see module doc).
+
+    Attributes:
+        name: Label of the design.
+        frame: ``"link"`` or ``"link@x,y,z"`` of the output point.
+        times_s: Output times (nt,) [s]; ``stop_s`` the end of the drive.
+        deflection_m: World-axes deflection (nt, 3) [m].
+        static_m: Static deflection at the final pose (3,) [m].
+        tip_peak_m, tip_rms_m, residual_amplitude_m: See the module doc [m].
+        dominant_frequency_hz: Dominant frequency after the stop [Hz] (NaN if the record after
+            the stop is shorter than 3 periods of it or has no vibration).
+        joint_condition: ``"locked"`` or ``"free"``: the joints during the residual vibration.
+        reference_hz: Lowest eigenfrequencies of the final pose for that joint condition [Hz].
+        steps, time_s: Integrator steps and compute time [s].
+        y: Design values [kg] by name; final_q: final ERLS joint coordinates (user convention).
+    """
+
+    name: str
+    frame: str
+    times_s: np.ndarray = field(repr=False)
+    stop_s: float
+    deflection_m: np.ndarray = field(repr=False)
+    static_m: np.ndarray
+    tip_peak_m: float
+    tip_rms_m: float
+    residual_amplitude_m: float
+    dominant_frequency_hz: float
+    joint_condition: str
+    reference_hz: tuple[float, ...]
+    steps: int
+    time_s: float
+    y: dict
+    final_q: tuple[float, ...]
+
+    def summary(self) -> dict:
+        """The JSON-ready metrics (no time series)."""
+        d = asdict(self)
+        for k in ("times_s", "deflection_m"):
+            d.pop(k)
+        d["static_m"] = [float(v) for v in self.static_m]
+        d["reference_hz"] = [float(v) for v in self.reference_hz]
+        d["final_q"] = [float(v) for v in self.final_q]
+        d["dominant_frequency_hz"] = (None if not np.isfinite(self.dominant_frequency_hz)
+                                      else float(self.dominant_frequency_hz))
+        return d
+
+    def to_json(self, *, series: bool = False) -> str:
+        """JSON text of :meth:`summary`, with the time series when ``series``."""
+        d = self.summary()
+        if series:
+            d["times_s"] = self.times_s.tolist()
+            d["deflection_m"] = self.deflection_m.tolist()
+        return json.dumps(d)
+
+
+def frame_deflection(dyn, sim, frame: str = "tool", xyz=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """World deflection (nt, 3) of a point of a link along a :class:`Simulation`."""
+    at = dyn.frame_map(frame, xyz)
+    out = np.empty((sim.times_s.size, 3))
+    cache: dict = {}
+    stop = sim.times_s > sim.stop_s
+    for i in range(sim.times_s.size):
+        qp = sim.q_physical[i]
+        key = "end" if stop[i] and sim.drive == "prescribed" else None
+        if key is not None and key in cache:
+            T, S, A = cache[key]
+        else:
+            T, S = at(sim.q[i] if sim.drive == "torque" else qp)
+            A = dyn.joint_offsets(sim.q[i] if sim.drive == "torque" else qp)[0]
+            if key is not None:
+                cache[key] = (T, S, A)
+        out[i] = T[:3] @ sim.x[i] + S[:3] @ (A @ sim.x[i])
+    return out
+
+
+def dominant_frequency(times: np.ndarray, signal: np.ndarray) -> float:
+    """Dominant frequency [Hz] of a uniformly sampled (n,) or (n, 3) signal (module doc)."""
+    t = np.asarray(times, dtype=float)
+    s = np.asarray(signal, dtype=float)
+    if s.ndim == 2:
+        s = s - s.mean(axis=0)
+        _, _, vt = np.linalg.svd(s, full_matrices=False)
+        s = s @ vt[0]
+    s = s - s.mean()
+    n = s.size
+    if n < 8 or not np.any(s):
+        return float("nan")
+    dt = float(np.mean(np.diff(t)))
+    nfft = 1 << int(np.ceil(np.log2(16 * n)))
+    spec = np.abs(np.fft.rfft(s * np.hanning(n), nfft))
+    freqs = np.fft.rfftfreq(nfft, dt)
+    k = int(np.argmax(spec[1:])) + 1
+    f0 = float(freqs[k])
+    if f0 * (t[-1] - t[0]) < 3.0:
+        return float("nan")
+    tt = t - t[0]
+    scale = float(np.abs(s).max())
+
+    def resid(p):
+        f, a, b, c, d = p
+        env = np.exp(-d * tt)
+        return (env * (a * np.cos(2 * np.pi * f * tt) + b * np.sin(2 * np.pi * f * tt)) + c
+                - s / scale)
+
+    fit = least_squares(resid, [f0, 1.0, 0.0, 0.0, 0.0],
+                        bounds=([0.8 * f0, -np.inf, -np.inf, -np.inf, -50.0 * f0],
+                                [1.2 * f0, np.inf, np.inf, np.inf, 50.0 * f0]),
+                        x_scale=[f0, 1, 1, 1, f0 + 1.0])
+    return float(fit.x[0])
+
+
+def vibration_report(dyn, sim, *, name: str = "design", frame: str = "tool",
+                     xyz=(0.0, 0.0, 0.0), n_reference: int = 3) -> VibrationReport:
+    """Deflection of a frame along a simulation and its metrics."""
+    xyz = np.asarray(xyz, dtype=float)
+    if xyz.shape != (3,):
+        raise ConfigurationError("the output point must have 3 coordinates [m]")
+    defl = frame_deflection(dyn, sim, frame, xyz)
+    t = sim.times_s
+    during = t <= sim.stop_s
+    after = ~during
+    final_q = sim.q_physical[-1]
+    ref, static = reference_modes(dyn, final_q, sim.joint_condition, frame, xyz, n_reference)
+    mag = np.linalg.norm(defl, axis=1)
+    resid = defl[after] - static
+    label = frame if not np.any(xyz) else f"{frame}@{','.join(f'{v:g}' for v in xyz)}"
+    return VibrationReport(
+        name=name, frame=label, times_s=t, stop_s=sim.stop_s, deflection_m=defl,
+        static_m=static, tip_peak_m=float(mag.max()),
+        tip_rms_m=float(np.sqrt(np.mean(mag[during] ** 2))) if np.any(during) else 0.0,
+        residual_amplitude_m=float(np.linalg.norm(resid, axis=1).max()) if np.any(after)
+        else 0.0,
+        dominant_frequency_hz=dominant_frequency(t[after], resid) if after.sum() > 8
+        else float("nan"),
+        joint_condition=sim.joint_condition, reference_hz=tuple(float(v) for v in ref),
+        steps=sim.steps, time_s=sim.time_s,
+        y={d.name: float(v) for d, v in zip(dyn.model.design, dyn.y)},
+        final_q=tuple(float(v) for v in sim.q[-1]),
+    )
+
+
+def locked_system(dyn, q):
+    """``(Mr, Kr, f, A)``: locked-joint elastic mass, stiffness, static load at pose q."""
+    M, _, K, F = dyn.linear_terms(q)
+    A = dyn.joint_offsets(q)[0]
+    Z = np.vstack([np.eye(dyn.nx), A])
+    return Z.T @ M @ Z, Z.T @ K @ Z, Z.T @ (F - K[:, dyn.nx:] @ np.asarray(q, float)), A
+
+
+def locked_frequencies(dyn, q) -> np.ndarray:
+    """Eigenfrequencies [Hz] of the arm with every joint locked (physical angles held) at q."""
+    import scipy.linalg
+
+    Mr, Kr, _, _ = locked_system(dyn, q)
+    return np.sqrt(np.clip(scipy.linalg.eigh(Kr, Mr, eigvals_only=True), 0, None)) / (2 * np.pi)
+
+
+def reference_modes(dyn, q, condition: str, frame: str, xyz, n: int):
+    """Lowest frequencies [Hz] at a pose for a joint condition; the frame's static deflection.
+
+    The static deflection [m] is that of the locked-joint arm (zero without gravity).
+    """
+    Mr, Kr, f, A = locked_system(dyn, q)
+    at = dyn.frame_map(frame, xyz)
+    T, S = at(q)
+    if condition == "locked":
+        ref = locked_frequencies(dyn, q)[:n]
+    else:
+        ref = dyn.model.frequencies(q, dyn.y)[:n]
+    static = np.zeros(3)
+    if np.any(f):
+        x = np.linalg.solve(Kr, f)
+        static = T[:3] @ x + S[:3] @ (A @ x)
+    return np.asarray(ref), static

@@ -1,0 +1,426 @@
+"""Terms of the ERLS equations of motion (paper 000 eq. 1) at a pose and velocity.
+
+Generalized coordinates ``z = [x; q]`` (elastic coordinates of :class:`FlexibleModel`, then the
+joint coordinates in the model's user convention). The equations are
+
+    M(q) z̈ + C(q, q̇) ż + K z = F(q),
+
+    M = [[Me, Me S], [Sᵀ Me, Sᵀ Me S]],   C = [[2 M_eG, Me Ṡ], [2 Sᵀ M_eG, Sᵀ Me Ṡ]],
+    K = blkdiag(Ke, 0),                  F = [Me g + f; Sᵀ (Me g + f)]  (generalized),
+
+written here as sums over *material points* instead of nodal blocks, which makes every term
+exact for the consistent beam mass:
+
+* every flexible link is sampled at 4 Gauss points per element (exact for the degree-6
+  integrands of the cubic Hermite fields), each a point of mass ``ρA w le``; point masses are
+  points; a rigid link's URDF inertia is replaced by 7 points (signed masses allowed) with the
+  same mass, centre of mass and inertia tensor, so its kinetic energy is the same;
+* point ``i`` on link ``L`` sits at ``c_i`` in the link frame and moves elastically by
+  ``u_i = E_i(q) x`` (link axes), ``E_i = C_i + D_i e_L(q)``, where ``e_L`` is the elastic twist of
+  the link root (the unique-ERLS copy of the parent attachment, rotated by the joint; constant
+  ``C_i`` for the link's own nodes);
+* its ERLS velocity in link axes is ``S_i q̇``, ``S_i = X(c_i) J_L`` with ``J_L`` Pinocchio's
+  LOCAL frame Jacobian of the link and ``X(c) = [I, −[c]×]``;
+* its acceleration (link axes) is taken as ``S_i q̈ + Ṡ_i q̇ + E_i ẍ + 2 G_i ẋ`` with the exact
+  ERLS (classical) acceleration ``Ṡ_i q̇ = X J̇_L q̇ + ω × (S_i q̇)`` (``J̇_L`` from
+  ``pin.computeJointJacobiansTimeVariation``) and the Coriolis term of the elastic motion in the
+  rotating link frame ``G_i = Ė_i + [ω]× E_i`` (``Ė_i`` is the rate of the root copy when the
+  child turns against its parent). This is eq. (1): ``Me = Σ m Eᵀ E``, ``Me S = Σ m Eᵀ S``,
+  ``M_eG = Σ m Eᵀ G``.
+* Terms of eq. (1)'s level of approximation are left out: products of the elastic
+  displacement with the rigid accelerations or with two rigid velocities (``α × u``,
+  ``ω × (ω × u)``, the shift of the child frames by the elastic joint offset), and any
+  prestress (geometric stiffness) from inertial or gravity loads. They are of relative size
+  ``|q̈| / ω₁²`` and ``|q̇|² / ω₁²`` (about 1e-5 on benchmark A).
+* The torsional rotary inertia ``ρIp`` of spatial beams is a rotational carrier with angular
+  acceleration ``J_ang q̈ + J̇_ang q̇ + E_r ẍ + (Ė_r + [ω]× E_r) ẋ`` and the Euler term
+  ``ω × (I ω)``.
+
+``M`` equals the assembly of :meth:`FlexibleModel.matrices` to round-off (tested).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from pinflex import beam
+from pinflex.erls.plan import attachment
+from pinflex.exceptions import ConfigurationError
+from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
+
+_GX, _GW = np.polynomial.legendre.leggauss(4)
+_GXI, _GWXI = 0.5 * (_GX + 1.0), 0.5 * _GW
+
+
+@dataclass(frozen=True)
+class _Carriers:
+    """Material points (or rotational carriers) of one link."""
+
+    link: str
+    c: np.ndarray  # (n, 3) positions in the link frame [m]
+    X: np.ndarray  # (n, 3, 6) X(c) = [I, -[c]x] (translational) or [0, I] (rotational)
+    C: np.ndarray  # (n, 3, nx) constant part of the elastic map (link axes)
+    D: np.ndarray | None  # (n, 3, 6) map of the link root twist, or None
+    mass: np.ndarray  # (n,) [kg] or (n, 3, 3) [kg m²] for rotational carriers
+    design: np.ndarray  # (n,) index of the design variable setting the mass, or -1
+
+
+@dataclass(frozen=True)
+class EomTerms:
+    """Terms of eq. (1) at one state; see :mod:`pinflex.dynamics.terms`.
+
+    Attributes:
+        M: Mass matrix (ndof, ndof).
+        C: Velocity matrix (ndof, ndof); the velocity forces are ``C @ ż``.
+        K: Stiffness matrix (ndof, ndof) (``Ke`` on the elastic block).
+        F: Generalized gravity force (ndof,) [N, N m] (zero without gravity).
+    """
+
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    F: np.ndarray
+
+
+class ErlsDynamics:
+    """Equations of motion of paper 000 eq. (1) for a :class:`~pinflex.FlexibleModel`.
+
+    Args:
+        model: The flexible model (its current point-mass values are the defaults).
+        y: Design values [kg] (default: the model's nominal values).
+        gravity: Gravity acceleration in world axes [m/s²], (3,) (default zero, as in paper 000's
+            benchmark).
+    """
+
+    def __init__(self, model, y=None, *, gravity=None):
+        self.model = model
+        self.y = model.check_y(y)
+        if self.y.ndim != 1:
+            raise ConfigurationError("ErlsDynamics takes one design vector (ny,)")
+        g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ConfigurationError(f"gravity must be 3 finite numbers [m/s²], got {gravity!r}")
+        self.gravity = g
+        self.nx, self.nv, self.ndof = model.nx, model.nv, model.ndof
+        self._pdata = model.model.createData()
+        self._points, self._rotors = _build_carriers(model, self.y)
+        self._links = sorted({c.link for c in self._points} | {c.link for c in self._rotors},
+                             key=model._order.index)
+        #: whether the joint offsets A(q) change with the pose (a joint on an element-0 point
+        #: of a link whose root itself moves elastically)
+        self.offsets_vary = any(
+            j.attach.lin is not None and j.parent != model._order[0] and j.user_col >= 0
+            for j in model._joints)
+        # the part of K that is not beam strain (joint springs, when the model has them)
+        q0 = np.zeros(self.nv)
+        e0, _ = root_twists(model, model.coord_map @ q0, model.coord_map)
+        self._K_const = np.zeros((self.ndof, self.ndof))
+        self._K_const = model.matrices(q0, self.y)[1] - self._stiffness(e0)
+
+    # ------------------------------------------------------------------ kinematics
+    def _kinematics(self, q: np.ndarray):
+        """Link Jacobians, rotations, root twists, and rates per unit joint velocity."""
+        model, pm, pd = self.model, self.model.model, self._pdata
+        Cm = model.coord_map
+        qp = model.pin_configuration(q)
+        pin.computeJointJacobians(pm, pd, qp)
+        pin.updateFramePlacements(pm, pd)
+        J, R = {}, {}
+        Jd = {link: np.zeros((self.nv, 6, self.nv)) for link in self._links}
+        for link in self._links:
+            fid = model._frame_id[link]
+            J[link] = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ Cm
+            R[link] = pd.oMf[fid].rotation.copy()
+        for k in range(self.nv):
+            pin.computeJointJacobiansTimeVariation(pm, pd, qp, Cm[:, k].copy())
+            for link in self._links:
+                Jd[link][k] = pin.getFrameJacobianTimeVariation(
+                    pm, pd, model._frame_id[link], pin.LOCAL) @ Cm
+        e, ed = root_twists(model, Cm @ q, Cm)
+        return J, Jd, R, e, ed
+
+    def _maps(self, p: _Carriers, J, Jd, e, ed):
+        """``W = [E, S]``, and per unit joint velocity ``G_k`` and ``Ṡ_k`` of a carrier group."""
+        JL = J[p.link]
+        el, edl = e.get(p.link), ed.get(p.link)
+        E = p.C if el is None else p.C + p.D @ el
+        S = p.X @ JL
+        wx = skew(JL[3:].T)  # (nv, 3, 3): [ω]× per unit joint velocity
+        Gk = np.einsum("kab,nbx->knax", wx, E)
+        if edl is not None:
+            Gk = Gk + np.einsum("nab,kbx->knax", p.D, edl)
+        Sdk = np.einsum("nab,kbj->knaj", p.X, Jd[p.link]) + np.einsum("kab,nbj->knaj", wx, S)
+        return np.concatenate([E, S], axis=-1), Gk, Sdk, S, wx
+
+    def point_maps(self, q):
+        """Per link: ``(W, Sdot_k)`` of the translational material points at a pose.
+
+        ``W = [E, S]`` (n, 3, ndof); ``Sdot_k`` (nv, n, 3, nv) with ``Σ_k q̇_k Sdot_k q̇`` the
+        ERLS acceleration at q̈ = 0. Used by the tests to check ``Ṡ`` against finite differences
+        of the point positions along a motion.
+        """
+        J, Jd, R, e, ed = self._kinematics(np.asarray(q, dtype=float))
+        out = {}
+        for p in self._points:
+            W, _, Sdk, _, _ = self._maps(p, J, Jd, e, ed)
+            out[p.link] = (W, Sdk, R[p.link], p.c)
+        return out
+
+    # ------------------------------------------------------------------ terms
+    def linear_terms(self, q):
+        """``M(q)``, ``C_k(q)`` (nv, ndof, ndof), ``K(q)``, ``F(q)``; ``C(q, q̇) = Σ q̇_k C_k``."""
+        q = np.asarray(q, dtype=float)
+        J, Jd, R, e, ed = self._kinematics(q)
+        nd, nx, nv = self.ndof, self.nx, self.nv
+        M = np.zeros((nd, nd))
+        Ck = np.zeros((nv, nd, nd))
+        F = np.zeros(nd)
+        gworld = bool(np.any(self.gravity != 0.0))
+        for p in self._points:
+            W, Gk, Sdk, _, _ = self._maps(p, J, Jd, e, ed)
+            n3 = 3 * p.mass.size
+            W2 = W.reshape(n3, nd)
+            mWt = (np.repeat(p.mass, 3)[:, None] * W2).T
+            M += mWt @ W2
+            Ck[:, :, :nx] += 2.0 * (mWt @ Gk.reshape(nv, n3, nx))
+            Ck[:, :, nx:] += mWt @ Sdk.reshape(nv, n3, nv)
+            if gworld:
+                F += mWt @ np.tile(R[p.link].T @ self.gravity, p.mass.size)
+        for p in self._rotors:
+            # rotational carriers (X = [0, I]): torque I Ω̇ + ω × (I ω), Ω̇ = J_ang q̈ + J̇_ang q̇
+            # + E_r ẍ + (Ė_r + [ω]× E_r) ẋ; Sdk holds J̇_ang + [ω]× J_ang
+            W, Gk, Sdk, S, wx = self._maps(p, J, Jd, e, ed)
+            n3 = 3 * p.mass.shape[0]
+            IWt = np.einsum("nab,nbi->ina", p.mass, W).reshape(nd, n3)
+            Jdang = Sdk - np.einsum("kab,nbj->knaj", wx, S)
+            gyro = np.einsum("kab,nbc,ncj->knaj", wx, p.mass, S).reshape(nv, n3, nv)
+            M += IWt @ W.reshape(n3, nd)
+            Ck[:, :, :nx] += IWt @ Gk.reshape(nv, n3, nx)
+            Ck[:, :, nx:] += IWt @ Jdang.reshape(nv, n3, nv) + W.reshape(n3, nd).T @ gyro
+        return M, Ck, self._stiffness(e), F
+
+    def terms(self, q, qd) -> EomTerms:
+        """``M, C, K, F`` of eq. (1) at joint coordinates ``q`` and velocities ``q̇`` (user)."""
+        M, Ck, K, F = self.linear_terms(q)
+        C = np.tensordot(np.asarray(qd, dtype=float), Ck, axes=(0, 0))
+        return EomTerms(M=M, C=C, K=K, F=F)
+
+    def _stiffness(self, e) -> np.ndarray:
+        """``K(q) = Σ bxᵀ Ke bx`` with ``bx = sel + root e_L(q)`` (the root copy turns with q)."""
+        K = self._K_const.copy()
+        for link, a in self.model._assembly_arrays.items():
+            el = e.get(link)
+            bx = a["sel"] if el is None else a["sel"] + a["root"] @ el
+            K[: self.nx, : self.nx] += bx.T @ a["stiffness"] @ bx
+        return K
+
+    def joint_offsets(self, q):
+        """``A`` (nv, nx) and its rates ``Ȧ_k`` (nv, nv, nx) per unit joint velocity.
+
+        ``A x`` is the elastic offset of the ERLS joint coordinates (user convention) against
+        the physical joint motion: a motor turns its joint by ``q_pin,j − aᵀθ_parent`` (the
+        joint-axis component of the parent attachment's elastic rotation, or translation for a
+        prismatic joint), so ``q_user = C⁻¹ (q_pin,phys + A_pin x)`` and ``A = C⁻¹ A_pin``.
+        """
+        model = self.model
+        Cm = model.coord_map
+        q = np.asarray(q, dtype=float)
+        e, ed = root_twists(model, Cm @ q, Cm)
+        nv, nx = self.nv, self.nx
+        Ap = np.zeros((nv, nx))
+        Adp = np.zeros((nv, nv, nx))
+        for j in model._joints:
+            if j.user_col < 0 or j.kind not in ("revolute", "prismatic"):
+                continue
+            att = j.attach
+            ep, edp = e[j.parent], ed[j.parent]
+            tau = att.const if (ep is None or att.lin is None) else (
+                att.lin @ ep if att.const is None else att.const + att.lin @ ep)
+            if tau is None:
+                continue
+            rows = slice(3, 6) if j.kind == "revolute" else slice(0, 3)
+            a = j.R_o @ j.axis  # joint axis in parent axes (invariant under the joint)
+            Ap[j.user_col] = a @ tau[rows]
+            if edp is not None and att.lin is not None:
+                Adp[:, j.user_col] = np.einsum("a,kax->kx", a, (att.lin @ edp)[:, rows])
+        Ci = np.linalg.inv(Cm)
+        return Ci @ Ap, np.einsum("ij,kjx->kix", Ci, Adp)
+
+    # ------------------------------------------------------------------ outputs
+    def frame_map(self, link: str, xyz=(0.0, 0.0, 0.0)):
+        """``(T, S)`` of a point on a link: elastic twist ``T(q) x`` and ERLS twist ``S(q) q̇``.
+
+        Returns a function of ``q`` giving ``(Tw, Sw)``, each with rows (translation, rotation)
+        in WORLD axes: ``Tw`` (6, nx), ``Sw`` (6, nv).
+        """
+        model = self.model
+        model.description.require_link(link)
+        xyz = np.asarray(xyz, dtype=float)
+        att = attachment(model, link, xyz)
+        pm, pd = model.model, model.model.createData()
+        fid = model._frame_id[link]
+        Xp = translate_twist(xyz)
+
+        def at(q):
+            q = np.asarray(q, dtype=float)
+            pin.computeJointJacobians(pm, pd, model.pin_configuration(q))
+            pin.updateFramePlacements(pm, pd)
+            Rw = rotate_twist(pd.oMf[fid].rotation)
+            JL = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ model.coord_map
+            e, _ = root_twists(model, model.coord_map @ q, np.zeros((model.nv, model.nv)))
+            el = e.get(link)
+            T = np.zeros((6, model.nx)) if att.const is None else att.const.copy()
+            if att.lin is not None and el is not None:
+                T = T + att.lin @ el
+            return Rw @ T, Rw @ (Xp @ JL)
+
+        return at
+
+
+def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
+    """Elastic twists of the link roots ``e_L`` (6, nx) in link axes and their rates.
+
+    Follows the unique-ERLS rule of the assembly (``FlexibleModel._root_twists``) at one pose:
+    a child root copies its parent attachment's elastic twist rotated into the child axes,
+    minus the joint's motion subspace. The rates ``ė_L`` (k, 6, nx) come from the joints
+    turning (or sliding) with the Pinocchio velocities in the columns of ``vrel`` (nv, k).
+    ``None`` where a root has no elastic motion.
+    """
+    tw: dict = {model._order[0]: None}
+    rate: dict = {model._order[0]: None}
+    vrel = np.asarray(vrel, dtype=float).reshape(model.nv, -1)
+    nk = vrel.shape[1]
+    for j in model._joints:
+        att = j.attach
+        ep, edp = tw[j.parent], rate[j.parent]
+        if ep is None or att.lin is None:
+            tau = att.const
+            taud = None
+        else:
+            tau = att.lin @ ep if att.const is None else att.const + att.lin @ ep
+            taud = None if edp is None else att.lin @ edp
+        if tau is None:
+            tw[j.child] = rate[j.child] = None
+            continue
+        zero = np.zeros((nk,) + tau.shape)
+        if j.kind == "revolute":
+            Rt = (j.R_o @ axis_rotation(j.axis, np.array([qrel[j.user_col]]))[0]).T
+            Rt6 = rotate_twist(Rt)
+            dRt6 = rotate_twist(-vrel[j.user_col][:, None, None] * (skew(j.axis) @ Rt))
+            child = Rt6 @ tau
+            childd = dRt6 @ tau + (zero if taud is None else Rt6 @ taud)
+        elif j.kind == "prismatic":
+            s = j.R_o @ j.axis
+            ob = _offset_block(s * qrel[j.user_col])
+            dob = np.stack([_offset_block(s * v) for v in vrel[j.user_col]])
+            Rt6 = rotate_twist(j.R_o.T)
+            child = Rt6 @ (tau + ob @ tau)
+            childd = Rt6 @ (dob @ tau + (zero if taud is None else taud + ob @ taud))
+        else:
+            Rt6 = rotate_twist(j.R_o.T)
+            child = Rt6 @ tau
+            childd = zero if taud is None else Rt6 @ taud
+        tw[j.child] = j.proj @ child
+        rate[j.child] = j.proj @ childd
+    return tw, rate
+
+
+# ---------------------------------------------------------------------- set-up
+def _offset_block(p: np.ndarray) -> np.ndarray:
+    """``translate_twist(p) − I``: the part of a shift by ``p`` that is linear in ``p``."""
+    out = np.zeros((6, 6))
+    out[:3, 3:] = -skew(p)
+    return out
+
+
+def _xmap(c: np.ndarray) -> np.ndarray:
+    out = np.zeros(c.shape[:-1] + (3, 6))
+    out[..., :, :3] = np.eye(3)
+    out[..., :, 3:] = -skew(c)
+    return out
+
+
+def _build_carriers(model, y: np.ndarray):
+    desc = model.description
+    nx = model.nx
+    design_index = {d.name: i for i, d in enumerate(model.design)}
+    points: list[_Carriers] = []
+    rotors: list[_Carriers] = []
+    for link, plan in model._flex.items():
+        spec = plan.spec
+        n = spec.elements
+        le = spec.length_m / n
+        shape = beam.shape_matrix(le, _GXI)  # (4, 6, 12) beam axes
+        rb = spec.rotation
+        cs, Cs, Ds, ms, Crs, Drs, Irs = [], [], [], [], [], [], []
+        ex = rb[:, 0]
+        for el in range(n):
+            rows = slice(6 * el, 6 * el + 12)
+            for g in range(_GXI.size):
+                Nt = rb @ shape[g, :3]
+                Nr = rb @ shape[g, 3:]
+                cs.append((el + _GXI[g]) / n * spec.tip)
+                Cs.append(Nt @ plan.sel[rows])
+                Ds.append(Nt @ plan.root[rows])
+                ms.append(spec.rhoA * le * _GWXI[g])
+                Crs.append(Nr @ plan.sel[rows])
+                Drs.append(Nr @ plan.root[rows])
+                Irs.append(spec.rhoIp * le * _GWXI[g] * np.outer(ex, ex))
+        c = np.array(cs)
+        points.append(_Carriers(link, c, _xmap(c), np.array(Cs), np.array(Ds),
+                                np.array(ms), -np.ones(len(ms), dtype=int)))
+        if spec.rhoIp > 0.0 and not model.planar:
+            rx = np.zeros((len(Irs), 3, 6))
+            rx[:, :, 3:] = np.eye(3)
+            rotors.append(_Carriers(link, c, rx, np.array(Crs), np.array(Drs),
+                                    np.array(Irs), -np.ones(len(Irs), dtype=int)))
+    for link in model._inertias:
+        ine = desc.inertias[link]
+        c, m = _equivalent_points(ine.mass, ine.com, ine.inertia)
+        X = _xmap(c)
+        points.append(_Carriers(link, c, X, np.zeros((c.shape[0], 3, nx)), X, m,
+                                -np.ones(m.size, dtype=int)))
+    for name, link, xyz, att in model._point_masses:
+        d = design_index.get(name, -1)
+        mass = y[d] if d >= 0 else model._pm_values[name]
+        C = np.zeros((1, 3, nx)) if att.const is None else att.const[None, :3]
+        D = None if att.lin is None else att.lin[None, :3]
+        points.append(_Carriers(link, np.asarray(xyz, float)[None], _xmap(np.asarray(
+            xyz, float)[None]), C, D, np.array([float(mass)]), np.array([d])))
+    return _merge(points), _merge(rotors)
+
+
+def _merge(groups: list[_Carriers]) -> list[_Carriers]:
+    """One carrier group per link (missing root maps become zeros)."""
+    out = []
+    for link in dict.fromkeys(g.link for g in groups):
+        gs = [g for g in groups if g.link == link]
+        Ds = [np.zeros(g.C.shape[:2] + (6,)) if g.D is None else g.D for g in gs]
+        out.append(_Carriers(
+            link, np.concatenate([g.c for g in gs]), np.concatenate([g.X for g in gs]),
+            np.concatenate([g.C for g in gs]), np.concatenate(Ds),
+            np.concatenate([g.mass for g in gs]), np.concatenate([g.design for g in gs])))
+    return out
+
+
+def _equivalent_points(mass: float, com: np.ndarray, inertia: np.ndarray):
+    """Seven points (signed masses) with the given mass, centre of mass and inertia tensor.
+
+    The second moment ``Q = ½ tr(I) 𝟙 − I`` about the centre of mass is reproduced by pairs of
+    points at ``± r_k`` along its principal axes; the centre point takes the rest of the mass.
+    """
+    Q = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    qk, V = np.linalg.eigh(0.5 * (Q + Q.T))
+    scale = max(np.sqrt(max(np.trace(inertia), 0.0) / max(mass, 1e-300)), 1e-3)
+    pts = [np.asarray(com, dtype=float)]
+    masses = []
+    for k in range(3):
+        mk = qk[k] / (2.0 * scale**2)
+        for s in (1.0, -1.0):
+            pts.append(com + s * scale * V[:, k])
+            masses.append(mk)
+    masses.insert(0, mass - sum(masses))
+    return np.array(pts), np.array(masses)
