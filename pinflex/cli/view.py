@@ -1,8 +1,10 @@
-"""``pinflex view``: a mode shape of a flexible URDF arm in meshcat.
+"""``pinflex view``: mode shapes of a flexible URDF arm, or a trajectory, in meshcat.
 
-With ``--html FILE`` the preview is written as a static page that opens offline; without it a
-local meshcat server is started, its URL printed, and the scene served until Ctrl-C (or for
-``--serve-seconds``). No browser is opened either way.
+With ``--html FILE`` the preview is written as a static page that opens offline: every
+computed mode (``--modes N``, default 6) with a selector showing each frequency, ``--mode K``
+shown first; with ``--trajectory CSV`` the motion is played back with the beams coloured by
+mode K's frequency. Without ``--html`` a local meshcat server is started, its URL printed, and
+the scene served until Ctrl-C (or for ``--serve-seconds``). No browser is opened either way.
 """
 
 from __future__ import annotations
@@ -22,7 +24,12 @@ def add_parser(sub) -> None:
     )
     add_robot_arguments(p)
     p.add_argument("--mode", type=int, default=1, metavar="K",
-                   help="mode to animate, 1 = lowest non-rigid mode (default: 1)")
+                   help="mode to show first (or to colour a trajectory by), 1 = lowest "
+                   "non-rigid mode (default: 1)")
+    p.add_argument("--modes", type=int, default=6, metavar="N",
+                   help="modes 1..N on the page, selectable (default: 6)")
+    p.add_argument("--trajectory", default=None, metavar="CSV",
+                   help="play a joint trajectory (header: t, joint names) instead")
     p.add_argument("--amplitude", type=float, default=None, metavar="A",
                    help="peak displacement drawn [m] (default: 8 %% of the robot's size)")
     p.add_argument("--html", default=None, metavar="FILE",
@@ -35,20 +42,43 @@ def add_parser(sub) -> None:
 def cmd_view(args: argparse.Namespace) -> int:
     """Run ``pinflex view``."""
     from pinflex.erls import FlexibleModel
-    from pinflex.visualization import mode_preview, served_visualizer
+    from pinflex.visualization import served_visualizer, trajectory_preview
+    from pinflex.visualization.modes_page import modes_preview
 
     model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
                           joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)
+    if not 1 <= args.mode <= model.nx:
+        from pinflex.exceptions import ConfigurationError
+
+        raise ConfigurationError(
+            f"mode {args.mode} does not exist: the model has elastic modes 1..{model.nx}"
+        )
+    vis = None if args.html else served_visualizer()
+    if args.trajectory:
+        from pinflex.native.along import trajectory_for
+        from pinflex.trajectory import Trajectory
+
+        traj = Trajectory.from_csv(args.trajectory)
+        preview = trajectory_preview(model, traj.times_s, trajectory_for(model, traj),
+                                     mode=args.mode, viewer=vis)
+        caption = (f"{model.description.name}: {traj.n_samples} samples over "
+                   f"{traj.duration_s:.3g} s, mode {args.mode} from "
+                   f"{preview.info['low_hz']:.2f} to {preview.info['high_hz']:.2f} Hz")
+        write = preview.write_html
+    else:
+        n = max(int(args.modes), int(args.mode))
+        page = modes_preview(model, q, min(n, model.nx), amplitude_m=args.amplitude, viewer=vis)
+        if vis is not None:
+            page.select(args.mode)
+        caption = page.captions[page.modes.index(args.mode)]
+
+        def write(path):
+            return page.write_html(path, initial=args.mode)
+    print(caption)
     if args.html:
-        preview = mode_preview(model, q, args.mode, amplitude_m=args.amplitude)
-        path = preview.write_html(args.html)
-        print(preview.caption)
-        print(f"wrote {path}")
+        print(f"wrote {write(args.html)}")
         return 0
-    vis = served_visualizer()
-    preview = mode_preview(model, q, args.mode, amplitude_m=args.amplitude, viewer=vis)
-    print(preview.caption)
     print(f"meshcat is serving the preview at {vis.url()}")
     try:
         if args.serve_seconds is None:

@@ -1,5 +1,7 @@
 """meshcat previews of flexible robots and PRBDM chains (SPEC §8).
 
+* :func:`modes_preview`: every computed mode of a pose on one page, selectable, with its
+  frequency, a framed camera and a floor grid (also into a user's meshcat viewer);
 * :func:`mode_preview`: a mode shape animated on the robot (deformed beams drawn with the
   element shape functions, URDF visuals through Pinocchio's ``MeshcatVisualizer``);
 * :func:`trajectory_preview`: a trajectory played back with the beams coloured by one mode's
@@ -24,6 +26,7 @@ from pinflex.exceptions import MissingDependency
 if importlib.util.find_spec("meshcat") is None:  # checked without importing meshcat
     raise MissingDependency("meshcat", "pinflex previews")
 
+from pinflex.visualization.modes_page import ModesPreview, modes_preview
 from pinflex.visualization.offline import OfflineWindow, offline_visualizer, require_meshcat
 from pinflex.visualization.prbdm import prbdm_preview, prbdm_preview_html
 from pinflex.visualization.previews import (
@@ -48,6 +51,7 @@ def served_visualizer(zmq_url: str | None = None):
 __all__ = [
     "CameraView",
     "Centreline",
+    "ModesPreview",
     "OfflineWindow",
     "Preview",
     "assignment_preview_html",
@@ -55,6 +59,7 @@ __all__ = [
     "mode_preview",
     "mode_preview_html",
     "mode_scale",
+    "modes_preview",
     "offline_visualizer",
     "prbdm_preview",
     "prbdm_preview_html",
