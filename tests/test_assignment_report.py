@@ -39,10 +39,11 @@ def test_frequencies_per_sample_and_mode(setup, tmp_path):
     res = _solve(model, traj)
     data = assignment_data(model, traj, res)
     assert data.modes == (1, 2, 3) and data.roles == ("target", "report", "report")
+    # (the assignment verifies with tracked eigenpairs: same numbers to solver round-off)
     np.testing.assert_allclose(data.after_hz, model.frequencies(traj.q, res.y)[:, :3],
-                               rtol=1e-12)
+                               rtol=1e-9)
     np.testing.assert_allclose(data.before_hz, model.frequencies(traj.q, np.zeros(2))[:, :3],
-                               rtol=1e-12)
+                               rtol=1e-9)
     pred = res.taylor.evaluate(traj.q, res.y, quantity="freq_hz", linear_in_design=True,
                                warn=False)
     np.testing.assert_allclose(data.predicted_hz[:, 0], pred[:, res.taylor.modes.index(1)],

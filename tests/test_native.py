@@ -200,3 +200,13 @@ def test_modal_result_repr_is_a_short_table(ur10_overlay):
     assert len(lines) <= 16
     assert f"{res.freq_hz[0]:.6g}" in lines[4]
     assert f"{res.eigvals.size - 10} more" in text
+
+
+def test_joint_conditions_pass_through(ur10_overlay):
+    """joints= of from_pinocchio is the constructor's: locked joints give the same model."""
+    locked_file = FlexibleModel(ur10_overlay.description, joints="locked")
+    arm = FlexibleModel.from_pinocchio(_ur10_pin_model(), flexible=UR10_FLEX,
+                                       masses=UR10_MASSES, joints="locked")
+    np.testing.assert_allclose(arm.frequencies(Q_UR10), locked_file.frequencies(Q_UR10),
+                               rtol=1e-10)
+    assert not np.allclose(arm.frequencies(Q_UR10)[:3], ur10_overlay.frequencies(Q_UR10)[:3])

@@ -148,7 +148,8 @@ class FlexibleModel:
             flexible: ``{link or joint name: pinflex.Beam}``; a joint name stands for the link
                 it carries.
             masses: ``{name: pinflex.Mass}`` point masses [kg, m].
-            joints: Joint condition of the modal model; ``None``/``"free"``: free joints.
+            joints: Joint conditions of the modal model, as for the constructor
+                (``"free"``, ``"locked"``, ``"annotated"`` or ``{joint: ...}``); default free.
             **kwargs: ``planar``, ``values``, ``coordinates`` as for the constructor.
 
         Example::

@@ -156,7 +156,9 @@ def example_robot(
         flexible: Flexible links ``{link or joint name: Beam}``; a joint name stands for the
             link it carries.
         masses: Point masses ``{name: Mass}``.
-        joints: Joint condition of the modal model (``None`` or ``"free"``: free joints).
+        joints: Joint conditions of the modal model, as for :class:`~pinflex.FlexibleModel`
+            (``"free"``, ``"locked"``, ``"annotated"`` or ``{joint: "free" | "locked" |
+            stiffness}``); default free.
         **kwargs: Passed to :class:`~pinflex.FlexibleModel` (``planar``, ``values``,
             ``coordinates``).
 
