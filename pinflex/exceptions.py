@@ -226,3 +226,15 @@ class InvalidSweep(BatchError):
 
 class StoreError(BatchError):
     """A batch result store cannot be opened or written, or has another schema version."""
+
+
+class ParameterNotFound(InvalidDescription):
+    """A ``{name}`` reference names no ``<pinflex:parameter>``."""
+
+    def __init__(self, name: str, available: Iterable[str], where: str = ""):
+        names = ", ".join(sorted(available)) or "(none declared)"
+        at = f"{where}: " if where else ""
+        super().__init__(
+            f"{at}'{{{name}}}' references no parameter; declared parameters: {names} "
+            f"(add <pinflex:parameter name=\"{name}\" value=\"...\"/>)"
+        )

@@ -30,6 +30,13 @@ station, with a rigid offset from the axis.
 ``<pinflex:point_mass>``: ``name``, ``link``, ``xyz`` in the link frame [m], ``mass`` [kg];
 with ``design="true"`` it is a design variable with ``lower``/``upper`` bounds [kg].
 
+``<pinflex:parameter name="d1" value="0.03" lower="0.02" upper="0.05" design="true"/>``
+declares a named number; any numeric attribute of a pinflex element may read ``"{d1}"``
+instead (see :mod:`pinflex.description.params`). ``design="true"`` makes it a design variable
+(section dimensions and properties, E, G, density, linear_density, point-mass values, joint
+stiffness); ``FlexibleModel(..., values={"d1": 0.04})`` and ``--set d1=0.04`` set it. The
+hollow circle also takes ``wall`` (thickness [m]) instead of ``inner_diameter``.
+
 ``<pinflex:joint name="..." stiffness="..."/>`` puts a spring on a moving joint's physical
 relative motion [N m/rad revolute, N/m prismatic]; ``locked="true"`` holds it rigidly. These
 conditions apply when a model is built with ``joints="annotated"`` (the default is all

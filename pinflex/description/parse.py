@@ -9,6 +9,7 @@ import numpy as np
 
 from pinflex import beam
 from pinflex.description.overlay import apply_overlay, resolve_base
+from pinflex.description.params import Resolver, parse_parameters
 from pinflex.description.types import (
     _NS,
     MOVING_JOINTS,
@@ -27,10 +28,14 @@ from pinflex.exceptions import (
     LinkNotFound,
     UnsupportedJoint,
 )
+from pinflex.sections import SHAPES, PropertyInputs, beam_properties
 
 
-def load(path: str | Path) -> RobotDescription:
-    """Read an annotated URDF file or a pinflex overlay (see :func:`apply_overlay`)."""
+def load(path: str | Path, values: dict[str, float] | None = None) -> RobotDescription:
+    """Read an annotated URDF file or a pinflex overlay (see :func:`apply_overlay`).
+
+    ``values`` override ``<pinflex:parameter>`` values (checked against their bounds).
+    """
     path = Path(path)
     if not path.is_file():
         raise InvalidDescription(f"URDF file '{path}' does not exist")
@@ -41,18 +46,30 @@ def load(path: str | Path) -> RobotDescription:
         raise InvalidDescription(f"'{path}' is not well-formed XML: {exc}") from exc
     if root_el.tag == _NS + "overlay":
         base = resolve_base(root_el.get("base", ""), path.parent)
-        return parse(apply_overlay(base.read_text(), root_el), base_dir=base.parent)
-    return parse(text, base_dir=path.parent)
+        return parse(apply_overlay(base.read_text(), root_el), base_dir=base.parent,
+                     values=values)
+    return parse(text, base_dir=path.parent, values=values)
 
 
-def parse(urdf_xml: str, base_dir: Path | None = None) -> RobotDescription:
-    """Parse URDF text with pinflex annotations."""
+def parse(urdf_xml: str, base_dir: Path | None = None,
+          values: dict[str, float] | None = None) -> RobotDescription:
+    """Parse URDF text with pinflex annotations.
+
+    Args:
+        urdf_xml: The URDF text.
+        base_dir: Folder of the file, for relative mesh paths.
+        values: Overrides of ``<pinflex:parameter>`` values by name (checked against the
+            parameters' bounds; names that are not parameters are ignored here, they may be
+            point masses set by :class:`pinflex.FlexibleModel`).
+    """
     try:
         root_el = ET.fromstring(urdf_xml)
     except ET.ParseError as exc:
         raise InvalidDescription(f"the URDF is not well-formed XML: {exc}") from exc
     if root_el.tag != "robot":
         raise InvalidDescription(f"the URDF's root element is <{root_el.tag}>, expected <robot>")
+    params = parse_parameters(root_el, _NS, values)
+    R = Resolver(params)
     links = tuple(el.get("name") for el in root_el.findall("link"))
     inertias = {}
     for el in root_el.findall("link"):
@@ -75,19 +92,19 @@ def parse(urdf_xml: str, base_dir: Path | None = None) -> RobotDescription:
         raise InvalidDescription(f"the URDF must have exactly one root link, found {roots}")
     flexible = {}
     for el in root_el.findall(_NS + "flexible"):
-        f = _parse_flexible(el, links, joints, child_joints, parent_joint)
+        f = _parse_flexible(el, links, joints, child_joints, parent_joint, R)
         if f.link in flexible:
             raise InvalidDescription(f"link '{f.link}' is declared flexible twice")
         flexible[f.link] = f
     point_masses = []
     for el in root_el.findall(_NS + "point_mass"):
-        point_masses.append(_parse_point_mass(el, links))
+        point_masses.append(_parse_point_mass(el, links, R))
     names = [p.name for p in point_masses]
     if len(set(names)) != len(names):
         raise InvalidDescription(f"point mass names must be unique, got {names}")
     annotations: dict[str, JointAnnotation] = {}
     for el in root_el.findall(_NS + "joint"):
-        a = _parse_joint_annotation(el, joints)
+        a = _parse_joint_annotation(el, joints, R)
         if a.name in annotations:
             raise InvalidDescription(f"joint '{a.name}' has two <pinflex:joint> elements")
         annotations[a.name] = a
@@ -113,6 +130,8 @@ def parse(urdf_xml: str, base_dir: Path | None = None) -> RobotDescription:
         child_joints={k: tuple(v) for k, v in child_joints.items()},
         parent_joint=parent_joint,
         joint_annotations=annotations,
+        parameters=R.finish(),
+        values={k: float(v) for k, v in (values or {}).items() if k in params},
     )
 
 
@@ -190,52 +209,66 @@ def _parse_joint(el: ET.Element, links: tuple[str, ...]) -> Joint:
     return Joint(name, jtype, parent, child, xyz, rot, axis, lower, upper)
 
 
-def _float_attr(el: ET.Element, key: str, what: str, *, required: bool = True) -> float | None:
-    text = el.get(key)
-    if text is None:
-        if required:
-            raise InvalidBeamProperty(f"{what}: attribute '{key}' is missing")
+def _float_attr(el: ET.Element, key: str, what: str, *, required: bool = True,
+                R: Resolver | None = None, design_ok: bool = False) -> float | None:
+    return (R or Resolver({})).number(el, key, what, required=required, design_ok=design_ok)
+
+
+def _entry(el: ET.Element, key: str, what: str, R: Resolver, *, required: bool = True):
+    """A property input: the number, or the name of the design parameter it references."""
+    value = R.number(el, key, what, required=required, design_ok=True)
+    if value is None:
         return None
-    try:
-        value = float(text)
-    except ValueError as exc:
-        raise InvalidBeamProperty(f"{what}: {key}='{text}' is not a number") from exc
-    if not np.isfinite(value) or value <= 0.0:
-        raise InvalidBeamProperty(f"{what}: {key}={text} must be a positive finite number")
-    return value
+    ref = R.ref(el, key)
+    return ref if ref is not None else value
 
 
-def _parse_section(el: ET.Element | None, what: str) -> beam.Section:
+def _parse_section(el: ET.Element | None, what: str, R: Resolver):
+    """``(shape, section inputs)`` of a ``<pinflex:section>``."""
     if el is None:
         raise InvalidBeamProperty(f"{what}: <pinflex:section> is missing")
     shape = el.get("shape")
     what = what + " section"
-    if shape is None:
-        vals = {k: _float_attr(el, k, what) for k in ("A", "Iy", "Iz", "J")}
-        return beam.Section(**vals)
-    if shape == "solid_circle":
-        return beam.solid_circle(_float_attr(el, "diameter", what))
+    if shape not in SHAPES:
+        raise InvalidBeamProperty(
+            f"{what}: unknown shape '{shape}'; use solid_circle, hollow_circle, rectangle or "
+            "explicit A, Iy, Iz, J"
+        )
+    allowed = SHAPES[shape]
+    extra = sorted(set(el.keys()) - set(allowed) - {"shape"})
+    if extra:
+        raise InvalidBeamProperty(
+            f"{what}: attribute(s) {extra} do not belong to shape '{shape or 'explicit'}', "
+            f"which takes {', '.join(allowed)}"
+        )
     if shape == "hollow_circle":
-        outer = _float_attr(el, "outer_diameter", what)
-        inner_text = el.get("inner_diameter", "0")
-        return beam.hollow_circle(outer, float(inner_text))
-    if shape == "rectangle":
-        return beam.rectangle(_float_attr(el, "width", what), _float_attr(el, "height", what))
-    raise InvalidBeamProperty(
-        f"{what}: unknown shape '{shape}'; use solid_circle, hollow_circle, rectangle or "
-        "explicit A, Iy, Iz, J"
-    )
+        if el.get("inner_diameter") is not None and el.get("wall") is not None:
+            raise InvalidBeamProperty(f"{what}: give inner_diameter or wall, not both")
+        out = {"outer_diameter": _entry(el, "outer_diameter", what, R)}
+        if el.get("wall") is not None:
+            out["wall"] = _entry(el, "wall", what, R)
+        elif el.get("inner_diameter") is not None:
+            value = R.number(el, "inner_diameter", what, positive=False, design_ok=True)
+            if value < 0.0:
+                raise InvalidBeamProperty(f"{what}: inner_diameter = {value} must be >= 0 [m]")
+            ref = R.ref(el, "inner_diameter")
+            out["inner_diameter"] = ref if ref is not None else value
+        return shape, out
+    return shape, {k: _entry(el, k, what, R) for k in allowed}
 
 
-def _parse_flexible(el, links, joints, child_joints, parent_joint) -> FlexibleLink:
+def _parse_flexible(el, links, joints, child_joints, parent_joint, R: Resolver) -> FlexibleLink:
     link = el.get("link")
     if link is None:
         raise InvalidDescription("<pinflex:flexible> needs a 'link' attribute")
     if link not in links:
         raise LinkNotFound(link, links)
     what = f"flexible link '{link}'"
+    elements_text = R.text(el, "elements", what) or ""
     try:
-        elements = int(el.get("elements", ""))
+        elements = int(float(elements_text))
+        if float(elements_text) != elements:
+            raise ValueError(elements_text)
     except ValueError as exc:
         raise InvalidBeamProperty(
             f"{what}: 'elements' must be a positive integer, got '{el.get('elements')}'"
@@ -243,7 +276,7 @@ def _parse_flexible(el, links, joints, child_joints, parent_joint) -> FlexibleLi
     if elements < 1:
         raise InvalidBeamProperty(f"{what}: 'elements' must be >= 1, got {elements}")
     if el.get("tip") is not None:
-        tip = _vec(el.get("tip"), "", what + " tip")
+        tip = _vec(R.text(el, "tip", what), "", what + " tip")
     else:
         children = child_joints[link]
         if len(children) != 1:
@@ -261,7 +294,7 @@ def _parse_flexible(el, links, joints, child_joints, parent_joint) -> FlexibleLi
     xdir = tip / length
     normal = _default_normal(xdir, joints.get(parent_joint.get(link, ""), None))
     if el.get("normal") is not None:
-        normal = _vec(el.get("normal"), "", what + " normal")
+        normal = _vec(R.text(el, "normal", what), "", what + " normal")
     normal = normal - xdir * (normal @ xdir)
     if np.linalg.norm(normal) < 1e-9:
         raise InvalidBeamProperty(f"{what}: the normal vector is parallel to the beam axis")
@@ -269,31 +302,62 @@ def _parse_flexible(el, links, joints, child_joints, parent_joint) -> FlexibleLi
     mat = el.find(_NS + "material")
     if mat is None:
         raise InvalidBeamProperty(f"{what}: <pinflex:material> is missing")
-    section = _parse_section(el.find(_NS + "section"), what)
-    E = _float_attr(mat, "E", what + " material")
-    G = _float_attr(mat, "G", what + " material", required=False)
-    if G is None:
-        nu = float(mat.get("poisson", "0.3"))
+    shape, section_inputs = _parse_section(el.find(_NS + "section"), what, R)
+    mwhat = what + " material"
+    material = {"E": _entry(mat, "E", mwhat, R)}
+    if mat.get("G") is not None:
+        material["G"] = _entry(mat, "G", mwhat, R)
+    else:
+        nu = R.number(mat, "poisson", mwhat, required=False, positive=False)
+        nu = 0.3 if nu is None else nu
         if not -1.0 < nu < 0.5:
             raise InvalidBeamProperty(f"{what}: poisson = {nu} must lie in (-1, 0.5)")
-        G = E / (2.0 * (1.0 + nu))
-    density = _float_attr(mat, "density", what + " material", required=False)
-    linear = _float_attr(mat, "linear_density", what + " material", required=False)
+        material["poisson"] = nu
+    density = _entry(mat, "density", mwhat, R, required=False)
+    linear = _entry(mat, "linear_density", mwhat, R, required=False)
     if (density is None) == (linear is None):
         raise InvalidBeamProperty(
             f"{what}: give exactly one of density [kg/m^3] or linear_density [kg/m]"
         )
-    rho = density if density is not None else linear / section.A
+    if density is not None:
+        material["density"] = density
+    else:
+        material["linear_density"] = linear
+    inputs = PropertyInputs(shape, section_inputs, material)
+    values = {n: p.value for n, p in R.params.items()}
+    props = beam_properties(inputs, values.__getitem__)
+    if shape == "hollow_circle":
+
+        def num(entry):
+            return values[entry] if isinstance(entry, str) else entry
+
+        od = num(section_inputs["outer_diameter"])
+        if "wall" in section_inputs:
+            w = num(section_inputs["wall"])
+            if not 2.0 * w < od:
+                raise InvalidBeamProperty(
+                    f"{what} section: wall = {w} must be below half the outer diameter {od} [m]"
+                )
+        else:
+            inner = num(section_inputs.get("inner_diameter", 0.0))
+            if not inner < od:
+                raise InvalidBeamProperty(
+                    f"{what} section: inner_diameter = {inner} must satisfy 0 <= inner < outer "
+                    f"= {od} [m]"
+                )
+    section = beam.Section(A=props["A"], Iy=props["Iy"], Iz=props["Iz"], J=props["J"])
+    G = props["GJ"] / props["J"]
     return FlexibleLink(
         link=link,
         elements=elements,
         tip=tip,
         normal=normal,
-        E=E,
+        E=props["EA"] / props["A"],
         G=G,
-        rhoA=rho * section.A,
-        rhoIp=rho * section.Ip,
+        rhoA=props["rhoA"],
+        rhoIp=props["rhoIp"],
         section=section,
+        inputs=inputs,
     )
 
 
@@ -305,7 +369,7 @@ def _default_normal(xdir: np.ndarray, parent: Joint | None) -> np.ndarray:
     return np.eye(3)[int(np.argmin(np.abs(xdir)))]
 
 
-def _parse_point_mass(el: ET.Element, links: tuple[str, ...]) -> PointMass:
+def _parse_point_mass(el: ET.Element, links: tuple[str, ...], R: Resolver) -> PointMass:
     name = el.get("name")
     if not name:
         raise InvalidDescription("<pinflex:point_mass> needs a 'name'")
@@ -313,24 +377,29 @@ def _parse_point_mass(el: ET.Element, links: tuple[str, ...]) -> PointMass:
     if link not in links:
         raise LinkNotFound(link, links)
     what = f"point mass '{name}'"
-    xyz = _vec(el.get("xyz"), "0 0 0", what + " xyz")
-    try:
-        mass = float(el.get("mass", "0"))
-    except ValueError as exc:
-        raise InvalidBeamProperty(f"{what}: mass='{el.get('mass')}' is not a number") from exc
+    xyz = _vec(R.text(el, "xyz", what), "0 0 0", what + " xyz")
+    mass = R.number(el, "mass", what, required=False, positive=False, design_ok=True)
+    mass = 0.0 if mass is None else mass
+    mass_ref = R.ref(el, "mass")
     if not np.isfinite(mass) or mass < 0.0:
         raise InvalidBeamProperty(f"{what}: mass = {mass} must be a finite number >= 0 [kg]")
     design = el.get("design", "false").lower() in ("1", "true", "yes")
+    if design and mass_ref is not None:
+        raise InvalidDescription(
+            f"{what}: its mass references the design parameter '{mass_ref}'; the parameter is "
+            "the design variable, so drop design=\"true\" from the point mass"
+        )
     lower = float(el.get("lower", "0"))
     upper = float(el.get("upper", "inf"))
     if design and not lower <= upper:
         raise InvalidDescription(f"{what}: lower bound {lower} is above upper bound {upper}")
     if design and lower < 0.0:
         raise InvalidDescription(f"{what}: lower bound {lower} would allow a negative mass")
-    return PointMass(name, link, xyz, mass, design, lower, upper)
+    return PointMass(name, link, xyz, mass, design, lower, upper, mass_ref)
 
 
-def _parse_joint_annotation(el: ET.Element, joints: dict[str, Joint]) -> JointAnnotation:
+def _parse_joint_annotation(el: ET.Element, joints: dict[str, Joint],
+                            R: Resolver) -> JointAnnotation:
     name = el.get("name")
     if not name:
         raise InvalidDescription("<pinflex:joint> needs a 'name' (a moving URDF joint)")
@@ -342,9 +411,10 @@ def _parse_joint_annotation(el: ET.Element, joints: dict[str, Joint]) -> JointAn
     if locked_text not in ("1", "true", "yes", "0", "false", "no"):
         raise InvalidDescription(f"{what}: locked='{el.get('locked')}' must be true or false")
     locked = locked_text in ("1", "true", "yes")
-    stiffness = _float_attr(el, "stiffness", what, required=False)
+    stiffness = R.number(el, "stiffness", what, required=False, design_ok=True)
+    stiffness_ref = R.ref(el, "stiffness")
     if locked and stiffness is not None:
         raise InvalidDescription(
             f"{what}: give either stiffness=\"...\" (a spring) or locked=\"true\", not both"
         )
-    return JointAnnotation(name, stiffness, locked)
+    return JointAnnotation(name, stiffness, locked, stiffness_ref)

@@ -8,8 +8,10 @@ from pathlib import Path
 import numpy as np
 
 from pinflex import beam
+from pinflex.description.params import Parameter
 from pinflex.exceptions import JointNotFound, LinkNotFound
 from pinflex.linalg import skew as _skew
+from pinflex.sections import PropertyInputs
 
 NAMESPACE = "urn:pinflex:urdf:1"
 _NS = "{" + NAMESPACE + "}"
@@ -85,6 +87,8 @@ class FlexibleLink:
         rhoA: Mass per unit length [kg/m].
         rhoIp: Torsional rotary inertia per unit length [kg m].
         section: Cross-section properties.
+        inputs: What the properties are computed from (section dimensions, material), with
+            design parameters by name (see :mod:`pinflex.sections`).
     """
 
     link: str
@@ -96,6 +100,7 @@ class FlexibleLink:
     rhoA: float
     rhoIp: float
     section: beam.Section
+    inputs: PropertyInputs | None = None
 
     @property
     def length_m(self) -> float:
@@ -122,6 +127,7 @@ class PointMass:
         design: Whether the mass is a design variable.
         lower: Lower bound of the design variable [kg].
         upper: Upper bound of the design variable [kg].
+        mass_ref: The design parameter the mass references (``mass="{name}"``), else None.
     """
 
     name: str
@@ -131,6 +137,7 @@ class PointMass:
     design: bool = False
     lower: float = 0.0
     upper: float = np.inf
+    mass_ref: str | None = None
 
 
 @dataclass(frozen=True)
@@ -143,11 +150,13 @@ class JointAnnotation:
             revolute joint, N/m for a prismatic one], or ``None`` for no spring.
         locked: Whether the joint is held rigidly (the child's root follows the parent's
             deformed attachment).
+        stiffness_ref: The design parameter the stiffness references, else None.
     """
 
     name: str
     stiffness: float | None = None
     locked: bool = False
+    stiffness_ref: str | None = None
 
 
 @dataclass(frozen=True)
@@ -167,6 +176,8 @@ class RobotDescription:
         absolute_coordinates: Whether user coordinates are absolute link angles.
         joint_annotations: ``<pinflex:joint>`` conditions by joint name (used when a model
             is built with ``joints="annotated"``).
+        parameters: ``<pinflex:parameter>`` elements by name, with their current values.
+        values: The parameter overrides the description was parsed with.
     """
 
     name: str
@@ -182,6 +193,15 @@ class RobotDescription:
     child_joints: dict[str, tuple[str, ...]] = field(default_factory=dict)
     parent_joint: dict[str, str] = field(default_factory=dict)
     joint_annotations: dict[str, JointAnnotation] = field(default_factory=dict)
+    parameters: dict[str, Parameter] = field(default_factory=dict)
+    values: dict[str, float] = field(default_factory=dict)
+
+    def with_values(self, values: dict[str, float]) -> RobotDescription:
+        """The same description with parameter values overridden (re-read from its text)."""
+        from pinflex.description.parse import parse
+
+        merged = {**self.values, **{k: float(v) for k, v in values.items()}}
+        return parse(self.urdf_xml, base_dir=self.base_dir, values=merged)
 
     def require_link(self, name: str) -> None:
         """Raise :class:`LinkNotFound` unless ``name`` is a link."""

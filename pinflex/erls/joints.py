@@ -128,6 +128,13 @@ def setup(model, joints) -> None:
     """Lay out the modal coordinates for the joint conditions (after the elastic layout)."""
     conds = resolve(model, joints)
     model.joint_conditions = conds
+    model._spring_refs = {}
+    if isinstance(joints, str) and joints == "annotated":
+        model._spring_refs = {
+            a.name: a.stiffness_ref
+            for a in model.description.joint_annotations.values()
+            if a.stiffness_ref is not None and not a.locked
+        }
     nv, nx = model.nv, model.nx
     locked = [i for i, c in enumerate(conds) if c.kind == "locked"]
     kept = [i for i, c in enumerate(conds) if c.kind != "locked"]

@@ -34,6 +34,7 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex.description import RobotDescription, load
+from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
 from pinflex.erls import modal, plan
 from pinflex.erls.terms import (
@@ -75,7 +76,8 @@ class FlexibleModel:
         description: A parsed description or the path of an annotated URDF.
         planar: Keep only in-plane elastic dofs (all revolute axes parallel to one normal,
             beams normal to it).
-        values: Overrides of point-mass values ``{name: kg}`` (checked against bounds).
+        values: Values of parameters and point masses ``{name: value}`` (checked against
+            their bounds); unknown names raise :class:`DesignVariableNotFound`.
         coordinates: 'relative' or 'absolute' to override the description's convention.
         joints: Joint conditions: 'free' (default, paper 000: no joint stiffness, one rigid
             mode per joint), 'locked' (every joint held rigidly), 'annotated' (the file's
@@ -96,6 +98,14 @@ class FlexibleModel:
     ):
         if not isinstance(description, RobotDescription):
             description = load(description)
+        values = dict(values or {})
+        known = set(description.parameters) | {p.name for p in description.point_masses}
+        for name in values:
+            if name not in known:
+                raise DesignVariableNotFound(name, sorted(known))
+        params = {k: v for k, v in values.items() if k in description.parameters}
+        if params:
+            description = description.with_values(params)
         self.description = description
         self.planar = bool(planar)
         try:
@@ -121,11 +131,23 @@ class FlexibleModel:
             DesignVariable(p.name, p.lower, p.upper, p.mass)
             for p in description.point_masses
             if p.design
+        ) + tuple(
+            DesignVariable(p.name, p.lower, p.upper, p.value, "parameter")
+            for p in description.parameters.values()
+            if p.design
         )
-        for name, value in (values or {}).items():
-            self.set_value(name, value)
+        index = {d.name: i for i, d in enumerate(self.design)}
+        self._mass_design_index = {
+            p.name: index[p.name if p.design else p.mass_ref]
+            for p in description.point_masses
+            if p.design or p.mass_ref is not None
+        }
+        for name, value in values.items():
+            if name not in params:
+                self.set_value(name, value)
         plan.build_plan(self)
         joint_conditions.setup(self, joints)
+        design_channels.setup(self)
 
     @classmethod
     def from_pinocchio(
@@ -189,7 +211,15 @@ class FlexibleModel:
 
     # ------------------------------------------------------------------ set-up
     def set_value(self, name: str, value: float) -> None:
-        """Set the nominal value of a point mass [kg]."""
+        """Set the nominal value of a point mass [kg].
+
+        Parameters are set when the model is built (``FlexibleModel(..., values={...})``).
+        """
+        if name in self.description.parameters:
+            raise ConfigurationError(
+                f"'{name}' is a parameter: set it when building the model, "
+                f"FlexibleModel(..., values={{'{name}': ...}}) or --set {name}=VALUE"
+            )
         if name not in self._pm_values:
             raise DesignVariableNotFound(name, self._pm_values)
         value = float(value)
@@ -378,7 +408,7 @@ class FlexibleModel:
             g = np.concatenate([_zeros_like(jl, nx) if e is None else e, jl], axis=-1)
             m = alg.mm(np.swapaxes(g, -1, -2), inertia @ g)
             M = m if M is None else M + m
-        design_index = {d.name: i for i, d in enumerate(self.design)}
+        design_index = self._mass_design_index
         shape_b = terms.jac[self._carriers[0]].shape[:1] if self._carriers else (1,)
         Mdesign = np.zeros((self.ny,) + shape_b + (nd, nd))
         for name, link, xyz, att in self._point_masses:
@@ -389,7 +419,7 @@ class FlexibleModel:
             )[..., :3, :]
             m = alg.mm(np.swapaxes(g, -1, -2), g)
             if name in design_index:
-                Mdesign[design_index[name]] = m
+                Mdesign[design_index[name]] += m
             else:
                 M = M + self._pm_values[name] * m if M is not None else self._pm_values[name] * m
         if M is None:
@@ -450,7 +480,8 @@ class FlexibleModel:
     def matrices_from_terms(self, terms: _PoseTerms, y: np.ndarray, n_poses: int):
         """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs."""
         M0, Md, K = self.assemble(terms, BatchAlgebra(n_poses))
-        return add_design_masses(M0, Md, y), K
+        M = add_design_masses(M0, Md, y)
+        return design_channels.add_to(self, terms, y, M, K, n_poses)
 
     # ------------------------------------------------------------------ joint conditions
     @property

@@ -14,19 +14,23 @@ PLANAR_NODE_DOFS = (0, 1, 5)  # ux, uy, θz in beam axes (beam z = plane normal)
 
 @dataclass(frozen=True)
 class DesignVariable:
-    """A design variable: the mass of a declared point mass [kg].
+    """A design variable: a point mass [kg] or a design parameter [its unit].
 
     Attributes:
-        name: Name of the point mass.
-        lower: Lower bound [kg].
-        upper: Upper bound [kg].
-        nominal: Value from the description (or ``--set``) [kg].
+        name: Name of the point mass or parameter.
+        lower: Lower bound.
+        upper: Upper bound.
+        nominal: Value from the description (or ``values=`` / ``--set``).
+        kind: 'mass' (a point mass with ``design="true"``) or 'parameter' (a
+            ``<pinflex:parameter design="true">``: a section dimension or property, material
+            constant, point-mass value or joint stiffness).
     """
 
     name: str
     lower: float
     upper: float
     nominal: float
+    kind: str = "mass"
 
 
 @dataclass(frozen=True)

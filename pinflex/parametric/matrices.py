@@ -11,6 +11,7 @@ from pinflex.erls import BatchAlgebra, FlexibleModel, _PoseTerms
 from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
 from pinflex.jets import JetSpace
 from pinflex.linalg import axis_rotation, skew
+from pinflex.parametric.design import add_jets as add_design_jets
 
 
 class JetAlgebra:
@@ -137,10 +138,12 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     if nj:
         qspace = JetSpace(nj, int(order))
         terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
-        Mq, Mdq, Kq = model.assemble(terms, JetAlgebra(qspace))
+        qalg = JetAlgebra(qspace)
+        Mq, Mdq, Kq = model.assemble(terms, qalg)
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:
-        Mq, Mdq, Kq = model.assemble(model.pose_terms(q0[None]), BatchAlgebra(1))
+        terms, qalg = model.pose_terms(q0[None]), BatchAlgebra(1)
+        Mq, Mdq, Kq = model.assemble(terms, qalg)
         alphas = [()]
     zeros = (0,) * nd
     emb = np.array([space.index[a + zeros] for a in alphas])
@@ -156,4 +159,6 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
             low = [i for i, a in enumerate(alphas) if sum(a) < order]
             shifted = np.array([space.index[alphas[i] + unit] for i in low], dtype=int)
             M[shifted] += Mdq[j][low]
+    # section, material and spring design parameters (nonlinear in y): pinflex.parametric.design
+    M, K = add_design_jets(model, space, terms, qalg, joint_idx, design_idx, y0, M, K)
     return space, M, np.array(K), joint_idx, design_idx

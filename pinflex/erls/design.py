@@ -1,0 +1,178 @@
+"""Design parameters that enter ``M`` and ``K`` nonlinearly: sections, materials, springs.
+
+Design point masses enter ``M`` linearly (``M = M0 + Σ y_j M_j``, see
+:meth:`FlexibleModel.assemble`). A design *parameter* of a flexible link's section or material
+changes the link's beam properties ``c = EA, GJ, EIy, EIz, ρA, ρIp``, each a nonlinear
+function ``f_c(y)`` of the parameters (:mod:`pinflex.description.properties`). The link's
+beam matrices are linear in those properties, ``K_link = Σ_c f_c K_c``, ``M_link = Σ_c f_c
+M_c`` with constant unit matrices, so
+
+    M(q, y) = M_nom(q) + Σ_c (f_c(y) − f_c(y_nom)) M_c(q),   and the same for K,
+
+where ``M_c(q)`` is the unit matrix taken through the ERLS kinematics of the link (and the
+joint conditions). A design parameter in a joint spring's stiffness is one more stiffness
+channel with the unit matrix ``gᵀg`` (:mod:`pinflex.erls.joints`); a point mass whose value
+references a design parameter is a linear mass term of that parameter.
+
+The same ``f_c`` formulas run on floats, per-pose arrays and jets, so the Taylor model's
+coefficients in section dimensions are exact (:func:`pinflex.parametric.matrix_jets`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pinflex import beam
+from pinflex.erls import joints as joint_conditions
+from pinflex.exceptions import InvalidBeamProperty
+from pinflex.sections import CHANNELS, beam_properties, section_limits
+
+
+@dataclass(frozen=True)
+class Channel:
+    """One design-dependent term ``f(y) · unit`` of ``M`` or ``K``.
+
+    Attributes:
+        kind: 'M' or 'K'.
+        owner: The flexible link, or the joint of a spring.
+        name: Beam property (``EA`` ... ``rhoIp``) or ``stiffness``.
+        unit: Unit matrix over the link's assembly rows (beam channels), else None.
+    """
+
+    kind: str
+    owner: str
+    name: str
+    unit: np.ndarray | None
+
+
+def setup(model) -> None:
+    """Find the design-dependent channels of a model (after the plan and joint set-up)."""
+    design = {d.name for d in model.design if d.kind == "parameter"}
+    channels: list[Channel] = []
+    links = []
+    for link, plan in model._flex.items():
+        inputs = plan.spec.inputs
+        if inputs is None or not set(inputs.parameters()) & design:
+            continue
+        links.append(link)
+        spec = plan.spec
+        n, le = spec.elements, spec.length_m / spec.elements
+        rows = np.ix_(plan.rows, plan.rows)
+        units = {
+            "EA": beam.element_stiffness(le, 1.0, 0.0, 0.0, 0.0),
+            "GJ": beam.element_stiffness(le, 0.0, 1.0, 0.0, 0.0),
+            "EIy": beam.element_stiffness(le, 0.0, 0.0, 1.0, 0.0),
+            "EIz": beam.element_stiffness(le, 0.0, 0.0, 0.0, 1.0),
+            "rhoA": beam.element_mass(le, 1.0, 0.0),
+            "rhoIp": beam.element_mass(le, 0.0, 1.0),
+        }
+        for name, kind in CHANNELS:
+            unit = beam.assemble_line(np.broadcast_to(units[name], (n, 12, 12)))[rows]
+            if np.any(unit):  # planar models drop the out-of-plane channels
+                channels.append(Channel(kind, link, name, unit))
+    for j, k in model._spring_joints:
+        ref = model._spring_refs.get(j.name)
+        if ref is not None and ref in design:
+            channels.append(Channel("K", j.name, "stiffness", None))
+    model._design_channels = tuple(channels)
+    model._design_links = tuple(links)
+
+
+def channel_values(model, get) -> list:
+    """``f_c`` of every channel, with design parameters read through ``get(name)``."""
+    props = {}
+    out = []
+    for ch in model._design_channels:
+        if ch.name == "stiffness":
+            out.append(get(model._spring_refs[ch.owner]))
+            continue
+        if ch.owner not in props:
+            props[ch.owner] = beam_properties(model._flex[ch.owner].spec.inputs, get)
+        out.append(props[ch.owner][ch.name])
+    return out
+
+
+def check_sections(model, get) -> None:
+    """Raise :class:`InvalidBeamProperty` where a design makes a section or property invalid."""
+    for link in model._design_links:
+        inputs = model._flex[link].spec.inputs
+        p = beam_properties(inputs, get)
+        limits = section_limits(inputs, get)
+        p.update(limits)
+        for key in ("A", "Iy", "Iz", "J", "rhoA", "rhoIp", "EA", "GJ", *limits):
+            v = np.real(np.asarray(p[key] if not hasattr(p[key], "value") else p[key].value))
+            if np.any(~np.isfinite(v)) or np.any(v <= 0.0):
+                raise InvalidBeamProperty(
+                    f"flexible link '{link}': this design gives {key} = "
+                    f"{float(np.ravel(v)[np.argmin(np.ravel(v))]):.4g} <= 0 (e.g. a tube whose "
+                    "inner diameter reaches the outer one): keep the design inside the valid "
+                    "section range"
+                )
+
+
+def components(model, terms, alg) -> list[np.ndarray]:
+    """Unit matrices ``M_c(q)`` / ``K_c(q)`` over the modal coordinates, one per channel."""
+    if not model._design_channels:
+        return []
+    twist = model._root_twists(terms, alg)
+    out: list[np.ndarray] = []
+    full = []
+    cache = {}
+    for ch in model._design_channels:
+        if ch.name == "stiffness":
+            j = next(jj for jj, _ in model._spring_joints if jj.name == ch.owner)
+            gx = joint_conditions.parent_rows(model, terms, alg, twist, [j])
+            g = np.concatenate([-gx, alg.const(model.coord_map[j.user_col][None, :])], axis=-1)
+            full.append(alg.mm(np.swapaxes(g, -1, -2), g))
+            continue
+        if ch.owner not in cache:
+            a = model._assembly_arrays[ch.owner]
+            e = twist[ch.owner]
+            bx = alg.const(a["sel"]) if e is None else alg.const(a["sel"]) + a["root"] @ e
+            w = np.concatenate([bx, a["jac"] @ terms.jac[ch.owner]], axis=-1)
+            cache[ch.owner] = (bx, w)
+        bx, w = cache[ch.owner]
+        nx = model.nx
+        if ch.kind == "M":
+            full.append(alg.mm(np.swapaxes(w, -1, -2), ch.unit @ w))
+        else:
+            k = alg.mm(np.swapaxes(bx, -1, -2), ch.unit @ bx)
+            big = np.zeros(k.shape[:-2] + (nx + model.nv, nx + model.nv))
+            big[..., :nx, :nx] = k
+            full.append(big)
+    T = joint_conditions.transform(model, terms, alg, twist)
+    for m in full:
+        if T is not None:
+            m = alg.mm(np.swapaxes(T, -1, -2), alg.mm(m, T))
+        out.append(m)
+    return out
+
+
+def add_to(model, terms, y: np.ndarray, M: np.ndarray, K: np.ndarray, n_poses: int):
+    """``M``, ``K`` at designs ``y`` (ny,) or (n, ny) from the nominal ones (batched poses)."""
+    if not model._design_channels:
+        return M, K
+    from pinflex.erls.terms import BatchAlgebra
+
+    idx = {d.name: i for i, d in enumerate(model.design)}
+    nominal = model.y0
+
+    def at(vec):
+        return lambda name: vec[..., idx[name]]
+
+    check_sections(model, at(y))
+    f = channel_values(model, at(y))
+    f0 = channel_values(model, at(nominal))
+    comps = components(model, terms, BatchAlgebra(n_poses))
+    dtype = complex if np.iscomplexobj(y) else float  # complex steps pass through
+    M, K = np.array(M, dtype=dtype), np.array(K, dtype=dtype)
+    for ch, fc, fc0, C in zip(model._design_channels, f, f0, comps):
+        delta = np.asarray(fc - fc0)
+        scaled = delta[..., None, None] * C
+        if ch.kind == "M":
+            M += scaled
+        else:
+            K += scaled
+    return M, K
