@@ -459,7 +459,7 @@ def track_modes(
     n = min(model.n_elastic, max(modes) + max(int(extra), 0))
     lam, phi, mass = eigenpairs(model, Q, Yb, n_modes=n, check_bounds=check_bounds)
     start, start_shapes = 0, None
-    if reference is not None and np.ndim(reference) == 0 and not isinstance(reference, tuple):
+    if reference is not None and not isinstance(reference, tuple) and np.ndim(reference) == 0:
         start = int(reference)
         if not 0 <= start < ns:
             raise ConfigurationError(f"reference sample {start} is not in 0..{ns - 1}")

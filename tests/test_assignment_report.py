@@ -86,3 +86,13 @@ def test_active_budget_floor_and_bounds(setup):
     for c in fd.constraints:
         if c["kind"] in ("lower_bound", "upper_bound"):
             assert c["active"] == (abs(c["slack"]) < 1e-6 * 0.25)
+
+
+def test_progress_of_the_stages(setup, capsys):
+    """progress=True draws the stage bar on stderr and ends it at 4/4 (no refinement)."""
+    model, traj = setup
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assign_frequencies(model, traj, [Target(1, 190.0)], q0=Q0, progress=True)
+    err = capsys.readouterr().err
+    assert "assignment stages" in err and "4/4" in err and "100%" in err

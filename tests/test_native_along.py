@@ -165,3 +165,13 @@ def test_study_path_table(tmp_path, arm):
                           n_samples=8, duration_s=1.5, q_init=Q0, orientation="keep")
     np.testing.assert_allclose(traj.q, ref.q, atol=1e-12)
     np.testing.assert_allclose(traj.times_s, ref.times_s)
+
+
+def test_tracking_reference_point_of_a_six_joint_arm(arm):
+    """A reference (q0, y0) with 6 joints and 1 design value is a point, not a sample index."""
+    from pinflex.tracking import track_modes
+
+    Q = np.linspace(Q0, Q0 + [0.2, 0.1, -0.1, 0, 0, 0], 5)
+    tr = track_modes(arm, Q, modes=(1, 2), reference=(Q0 + 0.01, np.array([2.0])))
+    np.testing.assert_allclose(np.sort(tr.freq_hz, axis=1), arm.frequencies(Q)[:, :2],
+                               rtol=1e-9)

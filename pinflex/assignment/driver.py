@@ -285,6 +285,7 @@ def assign_frequencies(
     max_refinements: int = 5,
     report_modes: Sequence[int] = (),
     freq_before_hz: np.ndarray | None = None,
+    progress: bool = False,
     **build_kwargs,
 ) -> AssignmentResult:
     """Solve the assignment QP with ProxQP and verify it with the exact model.
@@ -301,11 +302,19 @@ def assign_frequencies(
         freq_before_hz: Exact frequencies of ``y_before`` along the trajectory, (ns, modes)
             with the modes in the result's order (targets, then ``report_modes``), when the
             caller already has them (sweeps share them between cases).
+        progress: Show a progress bar of the stages (expansion, exact model before, QP,
+            exact verification, refinements) on stderr.
         **build_kwargs: Passed to :func:`build_assignment`.
 
     Raises:
         AssignmentInfeasible: the constraints admit no design.
     """
+    try:
+        from pinflex.progress import ProgressBar
+    except ImportError:  # the batch runner's bar, before the shared module exists
+        from pinflex.batch.runner import ProgressBar
+    bar = ProgressBar(4 + (max_refinements if refine else 0), "assignment stages",
+                      bool(progress))
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     Q = model.check_q(trajectory.q)
@@ -329,6 +338,7 @@ def assign_frequencies(
     t0 = time.perf_counter()
     problem, taylor = build_assignment(model, trajectory, targets, **build_kwargs)
     timings["expansion_and_build"] = time.perf_counter() - t0
+    bar.update()
     reference = (taylor.q0, taylor.y0)
     t0 = time.perf_counter()
     if freq_before_hz is None:
@@ -338,6 +348,7 @@ def assign_frequencies(
         err = float(np.abs(f_before[:, cols].T / tgt - 1.0).max())
         before = Verification(None, f_before, f_before, err, err)
     timings["exact_before"] = time.perf_counter() - t0
+    bar.update()
     floors = list(build_kwargs.get("floors", ()))
     t0 = time.perf_counter()
     floors_model = "taylor" if floors else ""
@@ -350,10 +361,12 @@ def assign_frequencies(
             model, trajectory, targets, build_kwargs, problem, taylor, y_before, exc)
         floors_model = "taylor+exact"
     timings["qp"] = time.perf_counter() - t0
+    bar.update()
     y = _design_from(model, taylor, solution.dy)
     t0 = time.perf_counter()
     after = verify_tracked(model, Q, y, tgt, tmodes, modes, reference)
     timings["exact_verification"] = time.perf_counter() - t0
+    bar.update()
     predicted = _predicted_error(problem, taylor, trajectory, targets, solution, build_kwargs)
     refinements = 0
     while refine and refinements < max_refinements:
@@ -367,12 +380,15 @@ def assign_frequencies(
         y2 = _design_from(model, tm2, s2.dy)
         v2 = verify_tracked(model, Q, y2, tgt, tmodes, modes, reference)
         timings["refinement"] = timings.get("refinement", 0.0) + time.perf_counter() - t0
+        bar.update()
         if v2.max_error >= after.max_error * (1 - 1e-9):
             break
         problem, taylor, solution, y, after = p2, tm2, s2, y2, v2
         predicted = _predicted_error(problem, taylor, trajectory, targets, solution, kwargs)
         refinements += 1
     margin = floor_margins(model, Q, y, floors, reference) if floors else None
+    bar.total = bar.done
+    bar.close()
     timings["total"] = time.perf_counter() - t_start
     err_before, err_after = before.max_error, after.max_error
     events = _target_events(before, after, tmodes)

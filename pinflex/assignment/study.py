@@ -184,7 +184,7 @@ def load_config(path: str | Path) -> AssignmentConfig:
 
 
 def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=None,
-               freq_before_hz=None):
+               freq_before_hz=None, progress: bool = False):
     """Build the model and trajectory of a study and solve it.
 
     Args:
@@ -195,6 +195,7 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
             mode the targets, floors and bands name), skipping the expansion.
         freq_before_hz: Reuse the exact frequencies before (see
             :func:`~pinflex.assignment.driver.assign_frequencies`).
+        progress: Show the stages' progress bar on stderr.
 
     Returns:
         ``(model, trajectory, result)``.
@@ -205,6 +206,7 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
     result = assign_frequencies(
         model, traj, cfg.targets,
         y_before=baseline, refine=cfg.refine, taylor=taylor, freq_before_hz=freq_before_hz,
+        progress=progress,
         report_modes=[m for m in cfg.report_modes if m <= model.n_elastic],
         q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
         order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,

@@ -317,35 +317,33 @@ def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
     return [row]
 
 
-class _TrajectoryFrequencies:
-    """``model.frequencies`` that reuses one assembly on a fixed set of poses.
+class _TrajectoryMatrices:
+    """``model.matrices`` that reuses one assembly on a fixed set of poses.
 
     ``M(q, y) = M0(q) + Σ_j y_j Md_j(q)``: the pose-dependent parts (Pinocchio Jacobians,
     beam and inertia assembly) are computed once for the group's trajectory; a call on those
-    poses only adds the design masses and solves the eigenproblems. Calls on other poses, or
-    with one design per pose, go to the model's own method. The numbers are the same as the
-    model's (same assembly, same sum).
+    poses with one design only adds the design masses. Calls on other poses, or with one design
+    per pose, go to the model's own method. The numbers are the model's own (same assembly,
+    same sum); exact frequencies and tracked eigenpairs both go through ``matrices``.
     """
 
     def __init__(self, model, Q: np.ndarray):
+        self.model, self.Q = model, np.array(Q, dtype=float)
+        self.own = model.matrices
+        terms = model.pose_terms(self.Q)
         from pinflex.erls import BatchAlgebra
 
-        self.model, self.Q = model, np.array(Q, dtype=float)
-        self.M0, self.Md, self.K = model.assemble(model.pose_terms(self.Q),
-                                                  BatchAlgebra(self.Q.shape[0]))
-        self.own = model.frequencies
+        self.M0, self.Md, self.K = model.assemble(terms, BatchAlgebra(self.Q.shape[0]))
 
-    def __call__(self, Q, y=None, *, n_modes=None, check_bounds=True):
+    def __call__(self, Q, y=None, *, check_bounds: bool = True):
         from pinflex.erls.model import add_design_masses
 
         Qa = np.asarray(Q, dtype=float)
-        yv = self.model.check_y(y, bounds=check_bounds)
-        if Qa.shape != self.Q.shape or yv.ndim != 1 or not np.array_equal(Qa, self.Q):
-            return self.own(Q, y, n_modes=n_modes, check_bounds=check_bounds)
-        lam = self.model.eigvals_from(add_design_masses(self.M0, self.Md, yv), self.K)
-        if n_modes is not None:
-            lam = lam[..., :n_modes]
-        return np.sqrt(lam) / (2.0 * np.pi)
+        if Qa.shape == self.Q.shape and np.array_equal(Qa, self.Q):
+            yv = self.model.check_y(y, bounds=check_bounds)
+            if yv.ndim == 1:
+                return add_design_masses(self.M0, self.Md, yv), self.K
+        return self.own(Q, y, check_bounds=check_bounds)
 
 
 def run_assign_group(items: list) -> list[dict]:
@@ -381,7 +379,7 @@ def run_assign_group(items: list) -> list[dict]:
             modes += [m for m in _needed_modes(cfg) if m not in modes]
         taylor = expand(model, q0, y0, order=cfg0.order, modes=modes)
         # this worker-local model verifies every case on the same poses: assemble them once
-        model.frequencies = _TrajectoryFrequencies(model, Q)
+        model.matrices = _TrajectoryMatrices(model, Q)
     except Exception:  # noqa: BLE001 - each case then reports its own error
         return [row for cfg, ov, h, case in items for row in run_assign_case(cfg, ov, h, case)]
     shared_s, shared_cpu = time.perf_counter() - t0, time.process_time() - c0

@@ -20,6 +20,8 @@ def add_parser(sub) -> None:
                    "constraints)")
     p.add_argument("--csv", default=None, metavar="FILE",
                    help="per sample and mode: target, before, predicted, exact after")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar on stderr (shown by default when stderr is a terminal)")
     p.add_argument("--parquet", default=None, metavar="FILE",
                    help="the same table as Parquet (needs pyarrow)")
     p.add_argument("--html", default=None, metavar="FILE", help="write an HTML preview")
@@ -73,7 +75,9 @@ def cmd_assign(args: argparse.Namespace) -> int:
         cfg.joints = args.joints
     if args.set:
         cfg.values = {**(cfg.values or {}), **parse_values(args.set)}
-    model, traj, result = run_config(cfg)
+    import sys
+
+    model, traj, result = run_config(cfg, progress=not args.no_progress and sys.stderr.isatty())
     total = time.perf_counter() - t0
     data = assignment_data(model, traj, result)
     charts, files = [], []
