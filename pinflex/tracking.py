@@ -369,45 +369,43 @@ def _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_m
     for s, r, mac in ambiguous:
         events.append(ModeEvent("ambiguous", s, (r + 1,), (float(f[s, r]),), 0.0, mac))
     # crossings: the sorted order of two slots flips between consecutive samples
-    for a in range(n):
-        for b in range(a + 1, n):
-            sign = np.sign(perm[:, a] - perm[:, b])
-            flips = np.flatnonzero(sign[1:] != sign[:-1]) + 1
-            for s in flips:
-                gap = min(abs(f[t, a] - f[t, b]) / max(f[t, a], f[t, b]) for t in (s - 1, s))
-                events.append(ModeEvent(
-                    "crossing", int(s), (a + 1, b + 1), (float(f[s, a]), float(f[s, b])),
-                    float(gap), float(min(mac_step[s, a], mac_step[s, b])),
-                ))
+    above = perm[:, :, None] > perm[:, None, :]  # (ns, n, n): slot a sorted above slot b
+    flips = np.triu(above[1:] != above[:-1], k=1)
+    for s, a, b in zip(*np.nonzero(flips)):
+        s, a, b = int(s) + 1, int(a), int(b)
+        gap = min(abs(f[t, a] - f[t, b]) / max(f[t, a], f[t, b]) for t in (s - 1, s))
+        events.append(ModeEvent(
+            "crossing", s, (a + 1, b + 1), (float(f[s, a]), float(f[s, b])),
+            float(gap), float(min(mac_step[s, a], mac_step[s, b])),
+        ))
     # veering: sorted neighbours approach within veer_rtol and exchange shape character
     if ns >= 3:
         fs = np.sqrt(np.maximum(lam, 0.0))
         gaps = (fs[:, 1:] - fs[:, :-1]) / fs[:, :-1]  # relative frequency gap of sorted i, i+1
         inv = np.argsort(perm, axis=1)  # sorted index -> slot
-        for i in range(n - 1):
+        close = (gaps[1:-1] <= gaps[:-2]) & (gaps[1:-1] < gaps[2:]) & (gaps[1:-1] < veer_rtol)
+        for s, i in zip(*(np.nonzero(close))):  # local minima of a neighbour gap
+            s, i = int(s) + 1, int(i)
             g = gaps[:, i]
-            for s in range(1, ns - 1):
-                if not (g[s] <= g[s - 1] and g[s] < g[s + 1] and g[s] < veer_rtol):
-                    continue
-                a, b = sorted((int(inv[s, i]), int(inv[s, i + 1])))
-                left, right = s, s
-                while left > 0 and g[left - 1] < 2 * g[s] and g[left - 1] >= g[left]:
-                    left -= 1
-                while right < ns - 1 and g[right + 1] < 2 * g[s] and g[right + 1] >= g[right]:
-                    right += 1
-                left, right = max(left - 1, 0), min(right + 1, ns - 1)
-                if np.any(np.sign(perm[left:right + 1, a] - perm[left:right + 1, b])
-                          != np.sign(perm[s, a] - perm[s, b])):
-                    continue  # the pair swaps here: a crossing, reported above
-                # the mode's own shape before and after the approach
-                C = mac_matrix(phi[left][:, [perm[left, a]]], phi[right][:, [perm[right, a]]],
-                               weight(right))
-                mac = float(C[0, 0])
-                if mac < veer_mac:
-                    events.append(ModeEvent(
-                        "veering", int(s), (a + 1, b + 1),
-                        (float(f[s, a]), float(f[s, b])), float(g[s]), mac,
-                    ))
+            a, b = sorted((int(inv[s, i]), int(inv[s, i + 1])))
+            left, right = s, s
+            while left > 0 and g[left - 1] < 2 * g[s] and g[left - 1] >= g[left]:
+                left -= 1
+            while right < ns - 1 and g[right + 1] < 2 * g[s] and g[right + 1] >= g[right]:
+                right += 1
+            left, right = max(left - 1, 0), min(right + 1, ns - 1)
+            if np.any(np.sign(perm[left:right + 1, a] - perm[left:right + 1, b])
+                      != np.sign(perm[s, a] - perm[s, b])):
+                continue  # the pair swaps here: a crossing, reported above
+            # the mode's own shape before and after the approach
+            C = mac_matrix(phi[left][:, [perm[left, a]]], phi[right][:, [perm[right, a]]],
+                           weight(right))
+            mac = float(C[0, 0])
+            if mac < veer_mac:
+                events.append(ModeEvent(
+                    "veering", int(s), (a + 1, b + 1),
+                    (float(f[s, a]), float(f[s, b])), float(g[s]), mac,
+                ))
     return events
 
 
