@@ -185,7 +185,9 @@ def build_assignment(
         order: Taylor order p.
         quantity: 'freq_hz' (expand f [Hz]) or 'eigval' (expand λ [rad²/s²]).
         design: Design variables to choose (default all).
-        mass_budget_kg: Upper bound of the sum of the chosen design masses [kg].
+        mass_budget_kg: Upper bound of the design mass of the chosen variables [kg]: their
+            point masses plus the beam mass of links whose section or material they set
+            (:func:`pinflex.erls.design.design_mass`, linearised at ``y0``).
         A_ineq: Extra rows ``A_ineq (y − y0) <= b_ineq`` on the chosen variables.
         b_ineq: Right-hand side of ``A_ineq``.
         floors: ``(mode, f_min_hz)``: the mode's predicted frequency stays above f_min
@@ -249,8 +251,16 @@ def build_assignment(
     upper = np.array([model.design[j].upper for j in didx]) - y0v[didx]
     A_rows, b_rows = [], []
     if mass_budget_kg is not None:
-        A_rows.append(np.ones(len(didx)))
-        b_rows.append(float(mass_budget_kg) - float(np.sum(y0v[didx])))
+        # the design mass: design point masses plus the beams of designed links (exactly the
+        # sum of the masses when only point masses are designed; linearised at y0 otherwise)
+        from pinflex.erls.design import design_mass
+
+        m0, grad = design_mass(model, y0v, order=1)
+        others = [j for j in range(model.ny) if j not in didx]
+        fixed = float(np.sum(y0v[others])) if all(
+            model.design[j].kind == "mass" for j in others) else 0.0
+        A_rows.append(grad[didx])
+        b_rows.append(float(mass_budget_kg) - (m0 - fixed))
     if A_ineq is not None:
         A_rows.extend(np.atleast_2d(np.asarray(A_ineq, dtype=float)))
         b_rows.extend(np.atleast_1d(np.asarray(b_ineq, dtype=float)))

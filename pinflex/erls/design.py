@@ -176,3 +176,50 @@ def add_to(model, terms, y: np.ndarray, M: np.ndarray, K: np.ndarray, n_poses: i
         else:
             K += scaled
     return M, K
+
+
+def design_mass(model, y, *, order: int = 0):
+    """Mass [kg] that depends on the design: design point masses plus design links' beams.
+
+    A point mass whose value is a design variable counts with that value; a flexible link whose
+    section or material is designed counts with its beam mass ``ρA(y) · L``. With ``order=1``
+    the gradient (ny,) is returned too, exact (jet arithmetic through the section formulas).
+
+    Args:
+        model: The flexible model.
+        y: Design values (ny,).
+        order: 0 for the mass, 1 for ``(mass, gradient)``.
+    """
+    from pinflex.jets import JetSpace
+    from pinflex.jets.scalar import Scalar, coefficients
+
+    y = model.check_y(y, bounds=False)
+    names = list(model.design_names)
+    ny = len(names)
+    if order and ny:
+        space = JetSpace(ny, 1)
+
+        def get(name):
+            return Scalar.variable(space, names.index(name), y[names.index(name)])
+
+        total = np.zeros(space.ncoef)
+    else:
+        space = None
+
+        def get(name):
+            return float(y[names.index(name)])
+
+        total = np.zeros(1)
+    for link in model._design_links:
+        spec = model._flex[link].spec
+        rhoA = beam_properties(spec.inputs, get)["rhoA"]
+        total = total + (coefficients(space, rhoA) if space else float(rhoA)) * spec.length_m
+    for pm in model.description.point_masses:
+        if pm.name in model._mass_design_index:
+            name = model.design[model._mass_design_index[pm.name]].name
+            v = get(name)
+            total = total + (coefficients(space, v) if space else float(v))
+    if not order:
+        return float(total[0])
+    grad = total[1:1 + ny] if space is not None else np.zeros(ny)
+    return float(total[0]), np.asarray(grad, dtype=float)
