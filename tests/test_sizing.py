@@ -43,7 +43,8 @@ def test_design_mass_counts_link_beams_and_masses(rods):
 
 def test_least_mass_under_a_floor_matches_exact_optimisation(rods):
     """Mode 1 kept 15 % above today's lowest value with the least rod mass: the sequential
-    Taylor sizing reaches the optimum of SLSQP on the exact model, floors exactly kept."""
+    Taylor sizing reaches the optimum of SLSQP on the exact model, floors exactly kept.
+    """
     model, traj = rods
     f_today = model.frequencies(traj.q, n_modes=1)[:, 0]
     floor = 1.15 * f_today.min()
