@@ -155,7 +155,7 @@ def load_config(path: str | Path) -> AssignmentConfig:
     cons = data.get("constraints", {})
     opts = data.get("options", {})
     known = {"robot", "planar", "trajectory", "expansion", "targets", "constraints", "options",
-             "joints", "values"}
+             "joints", "values", "simulation"}
     unknown = set(data) - known
     if unknown:
         raise ConfigurationError(

@@ -28,6 +28,7 @@ SUBCOMMANDS: list[str] = [
     "view",
     "batch",
     "prbdm",
+    "simulate",
 ]
 
 

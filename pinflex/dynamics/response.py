@@ -87,22 +87,39 @@ class VibrationReport:
 
 
 def frame_deflection(dyn, sim, frame: str = "tool", xyz=(0.0, 0.0, 0.0)) -> np.ndarray:
-    """World deflection (nt, 3) of a point of a link along a :class:`Simulation`."""
+    """World deflection (nt, 3) of a point of a link along a :class:`Simulation`.
+
+    The maps ``T(q)``, ``S(q) A(q)`` are evaluated exactly at every output sample of a torque
+    drive and, for a prescribed motion, at 1 ms spacing along the motion (cubic spline in
+    time in between; they change with the pose only) and once for the held pose.
+    """
+    from scipy.interpolate import CubicSpline
+
     at = dyn.frame_map(frame, xyz)
-    out = np.empty((sim.times_s.size, 3))
-    cache: dict = {}
-    stop = sim.times_s > sim.stop_s
-    for i in range(sim.times_s.size):
-        qp = sim.q_physical[i]
-        key = "end" if stop[i] and sim.drive == "prescribed" else None
-        if key is not None and key in cache:
-            T, S, A = cache[key]
-        else:
-            T, S = at(sim.q[i] if sim.drive == "torque" else qp)
-            A = dyn.joint_offsets(sim.q[i] if sim.drive == "torque" else qp)[0]
-            if key is not None:
-                cache[key] = (T, S, A)
-        out[i] = T[:3] @ sim.x[i] + S[:3] @ (A @ sim.x[i])
+    t = sim.times_s
+    nx = dyn.nx
+
+    def maps(q):
+        T, S = at(q)
+        return T[:3] + S[:3] @ dyn.joint_offsets(q)[0]
+
+    if sim.drive == "torque":
+        return np.array([maps(sim.q[i]) @ sim.x[i] for i in range(t.size)])
+    out = np.empty((t.size, 3))
+    hold = t > sim.stop_s
+    if np.any(hold):
+        out[hold] = sim.x[hold] @ maps(sim.q_physical[-1]).T
+    during = ~hold
+    if np.any(during):
+        td = t[during]
+        n = max(4, int(np.ceil((td[-1] - td[0]) / 1e-3)) + 1)
+        grid = np.linspace(td[0], td[-1], n)
+        qg = np.array([np.interp(grid, td, sim.q_physical[during, j])
+                       for j in range(dyn.nv)]).T
+        Pg = np.array([maps(q) for q in qg]).reshape(n, 3 * nx)
+        P = CubicSpline(grid, Pg, axis=0)(td).reshape(-1, 3, nx) if n > 1 else Pg.reshape(
+            -1, 3, nx)
+        out[during] = np.einsum("tax,tx->ta", P, sim.x[during])
     return out
 
 
@@ -153,7 +170,8 @@ def vibration_report(dyn, sim, *, name: str = "design", frame: str = "tool",
     during = t <= sim.stop_s
     after = ~during
     final_q = sim.q_physical[-1]
-    ref, static = reference_modes(dyn, final_q, sim.joint_condition, frame, xyz, n_reference)
+    ref, static = reference_modes(dyn, final_q, sim.joint_condition, frame, xyz, n_reference,
+                                  servo_stiffness=getattr(sim, "servo_stiffness", 0.0))
     mag = np.linalg.norm(defl, axis=1)
     resid = defl[after] - static
     label = frame if not np.any(xyz) else f"{frame}@{','.join(f'{v:g}' for v in xyz)}"
@@ -188,7 +206,8 @@ def locked_frequencies(dyn, q) -> np.ndarray:
     return np.sqrt(np.clip(scipy.linalg.eigh(Kr, Mr, eigvals_only=True), 0, None)) / (2 * np.pi)
 
 
-def reference_modes(dyn, q, condition: str, frame: str, xyz, n: int):
+def reference_modes(dyn, q, condition: str, frame: str, xyz, n: int, *,
+                    servo_stiffness: float = 0.0):
     """Lowest frequencies [Hz] at a pose for a joint condition; the frame's static deflection.
 
     The static deflection [m] is that of the locked-joint arm (zero without gravity).
@@ -198,6 +217,13 @@ def reference_modes(dyn, q, condition: str, frame: str, xyz, n: int):
     T, S = at(q)
     if condition == "locked":
         ref = locked_frequencies(dyn, q)[:n]
+    elif condition == "servo":
+        from pinflex.erls import FlexibleModel
+
+        m = dyn.model
+        springs = FlexibleModel(m.description, planar=m.planar, coordinates=m.coordinates,
+                                joints={j: servo_stiffness for j in m.joint_names})
+        ref = springs.frequencies(q, dyn.y)[:n]
     else:
         ref = dyn.model.frequencies(q, dyn.y)[:n]
     static = np.zeros(3)

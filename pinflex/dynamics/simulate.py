@@ -201,8 +201,9 @@ class Simulation:
         q_physical: Physical (motor) joint coordinates, user convention (nt, nv).
         stop_s: Time the drive stops (last trajectory sample) [s].
         drive: ``"prescribed"`` or ``"torque"``.
-        joint_condition: Joint condition of the vibration after the stop (``"locked"`` or
-            ``"free"``).
+        joint_condition: Joint condition of the vibration after the stop: ``"locked"``
+            (prescribed motion), ``"free"`` (torque drive without feedback) or ``"servo"``
+            (torque drive with PD feedback: joint springs of stiffness ``servo_stiffness``).
         torque_times_s: Times of ``torques`` (the trajectory samples and the end) [s].
         torques: Motor torques in Pinocchio's joint convention (nk, nv) [N m or N].
         steps: Accepted integrator steps; ``nfev`` right-hand-side evaluations.
@@ -225,6 +226,7 @@ class Simulation:
     nfev: int
     time_s: float
     method: str
+    servo_stiffness: float = 0.0
 
 
 def _times(t0: float, t1: float, sample_hz: float) -> np.ndarray:
@@ -363,6 +365,130 @@ def simulate_prescribed(
     )
 
 
+def simulate_torque(
+    dyn: ErlsDynamics,
+    *,
+    q0,
+    duration_s: float,
+    qd0=None,
+    x0=None,
+    xd0=None,
+    torque=None,
+    trajectory=None,
+    kp: float = 0.0,
+    kd: float = 0.0,
+    damping: Damping | None = None,
+    sample_hz: float = 5000.0,
+    rtol: float = 1e-5,
+    atol: float = 1e-10,
+    atol_q: float = 1e-9,
+    rho_inf: float = 0.9,
+    corrections: int = 1,
+) -> Simulation:
+    """Forward dynamics of eq. (1) under motor torques (free joints between the motors).
+
+    A motor torque ``τ`` (Pinocchio's joint convention) does work on the physical joint angle
+    ``r = G [x; q]`` (``G = [−C A, C]``), so the generalized force is ``Gᵀ τ``: it loads the
+    joint coordinate and, through ``A``, the parent attachment (the stator's reaction). Joint
+    springs, if the model has them, are at rest at the initial pose.
+
+    Args:
+        dyn: Equations of motion.
+        q0: Initial ERLS joint coordinates (user convention).
+        duration_s: Simulated time [s].
+        qd0: Initial joint rates (default zero).
+        x0: Initial elastic coordinates (default zero).
+        xd0: Initial elastic rates (default zero).
+        torque: ``f(t, q, qd, x, xd) -> τ`` (nv,) [N m]; default zero (free vibration).
+        trajectory: With no ``torque``: computed torque of the rigid model along these
+            samples (the joint rows of eq. (1) at ``x = 0``, fed forward), plus PD feedback
+            ``kp (r_d − r) + kd (ṙ_d − ṙ)`` on the physical joint angles; after the last
+            sample the reference holds.
+        kp: Proportional gain of the feedback [N m/rad].
+        kd: Derivative gain [N m s/rad].
+        damping: Rayleigh damping of the elastic motion (``"modal"`` is not available here:
+            the modes change with the pose).
+        sample_hz: Output rate [Hz].
+        rtol: Relative tolerance.
+        atol: Absolute tolerance on ``x`` [m, rad].
+        atol_q: Absolute tolerance on ``q`` [rad].
+        rho_inf: Generalized-α high-frequency spectral radius (1: no numerical damping).
+        corrections: Corrector evaluations of eq. (1) per step (see :func:`newmark`).
+    """
+    _check_positive(duration_s=duration_s, sample_hz=sample_hz, rtol=rtol, atol=atol,
+                    atol_q=atol_q)
+    damping = damping or Damping()
+    if damping.kind == "modal":
+        raise ConfigurationError("the torque drive takes Rayleigh damping or none")
+    nx, nv, nd = dyn.nx, dyn.nv, dyn.ndof
+    Cm = dyn.model.coord_map
+    q0 = dyn.model.check_q(q0).astype(float)
+    z0 = np.concatenate([np.zeros(nx) if x0 is None else np.asarray(x0, float), q0])
+    zd0 = np.concatenate([np.zeros(nx) if xd0 is None else np.asarray(xd0, float),
+                          np.zeros(nv) if qd0 is None else np.asarray(qd0, float)])
+    z_ref = np.concatenate([np.zeros(nx), q0])
+    motion = None
+    if torque is None and trajectory is not None:
+        motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
+
+    def joint_rows(q):
+        A = dyn.joint_offsets(q)[0]
+        return np.hstack([-(Cm @ A), Cm])
+
+    def applied(t, z, zd, G, terms):
+        if torque is not None:
+            return np.asarray(torque(t, z[nx:], zd[nx:], z[:nx], zd[:nx]), dtype=float)
+        if motion is None:
+            return np.zeros(nv)
+        qr, qdr, qddr = motion(t)
+        M, Ck, _, F = dyn.linear_terms(qr)
+        Cr = np.tensordot(qdr, Ck, axes=(0, 0))
+        tau = np.linalg.solve(Cm.T, M[nx:, nx:] @ qddr + Cr[nx:, nx:] @ qdr - F[nx:])
+        return tau + kp * (Cm @ qr - G @ z) + kd * (Cm @ qdr - G @ zd)
+
+    def coeff(t, z, zd):
+        M, Ck, K, F = dyn.linear_terms(z[nx:])
+        C = np.tensordot(zd[nx:], Ck, axes=(0, 0))
+        if damping.kind == "rayleigh":
+            C[:nx, :nx] += damping.alpha * M[:nx, :nx] + damping.beta * K[:nx, :nx]
+        G = joint_rows(z[nx:])
+        f = F + G.T @ applied(t, z, zd, G, None) + K @ z_ref
+        return M, C, K, f
+
+    tic = time.perf_counter()
+    run = newmark(coeff, 0.0, duration_s, z0, zd0, rtol=rtol, atol=atol,
+                  h0=min(1.0 / sample_hz, duration_s / 10), rho_inf=rho_inf,
+                  corrections=max(1, int(corrections)),
+                  groups=[(slice(0, nx), atol), (slice(nx, nd), atol_q)])
+    elapsed = time.perf_counter() - tic
+    times = _times(0.0, duration_s, sample_hz)
+    Y = run(times)
+    z, zd = Y[:, :nd], Y[:, nd:]
+    q_phys = np.empty((times.size, nv))
+    for i in range(times.size):
+        G = joint_rows(z[i, nx:])
+        q_phys[i] = np.linalg.solve(Cm, G @ z[i])
+    stop = motion.t1 if motion is not None else 0.0
+    t_tau = np.asarray(motion.trajectory.times_s, float) if motion is not None else times[:1]
+    tau = np.array([applied(t, *(lambda y: (y[:nd], y[nd:]))(run(np.array([t]))[0]),
+                            joint_rows(run(np.array([t]))[0][nx:nd]), None) for t in t_tau])
+    return Simulation(
+        times_s=times, x=z[:, :nx], xd=zd[:, :nx], q=z[:, nx:], qd=zd[:, nx:],
+        q_physical=q_phys, stop_s=stop, drive="torque",
+        joint_condition="servo" if (motion is not None and kp > 0.0) else "free",
+        servo_stiffness=float(kp) if motion is not None else 0.0,
+        torque_times_s=t_tau, torques=tau, steps=run.steps, nfev=run.nfev, time_s=elapsed,
+        method="newmark",
+    )
+
+
+def energy(dyn: ErlsDynamics, z: np.ndarray, zd: np.ndarray) -> float:
+    """Kinetic plus strain energy ``½ żᵀ M(q) ż + ½ xᵀ K x`` [J] of one state ``[x; q]``."""
+    M, _, K, _ = dyn.linear_terms(z[dyn.nx:])
+    x = z[: dyn.nx]
+    return float(0.5 * zd @ M @ zd + 0.5 * x @ K[: dyn.nx, : dyn.nx] @ x)
+
+
 def _lowest_eig(K, M) -> float:
     import scipy.linalg
 
@@ -457,7 +583,8 @@ class _NewmarkRun:
 
 
 def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-4,
-            h_min=1e-9, rho_inf: float = 0.9) -> _NewmarkRun:
+            h_min=1e-9, rho_inf: float = 0.9, corrections: int = 0,
+            groups=None) -> _NewmarkRun:
     """Generalized-α (Chung–Hulbert 1993) integration of ``M(t) ẍ + C(t) ẋ + K(t) x = f(t)``.
 
     A Newmark scheme with ``α_m = (2ρ∞ − 1)/(ρ∞ + 1)``, ``α_f = ρ∞/(ρ∞ + 1)``,
@@ -482,6 +609,12 @@ def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-
         h0: First step [s].
         h_min: Smallest step [s]; a step this small is accepted whatever its error.
         rho_inf: Spectral radius at infinite frequency, in [0, 1].
+        corrections: For a state-dependent system, ``coeff(t, x, v)`` is evaluated at the
+            predicted state and then this many times at the corrected one (each time the
+            step is solved again with the new coefficients); 0 for a linear system
+            ``coeff(t)``.
+        groups: Optional ``[(rows, atol), ...]``: coordinate groups with their own absolute
+            tolerance, each controlled separately (default: all with ``atol``).
     """
     if not 0.0 <= rho_inf <= 1.0:
         raise ConfigurationError(f"rho_inf = {rho_inf!r} must lie in [0, 1]")
@@ -489,26 +622,34 @@ def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-
     af = rho_inf / (rho_inf + 1.0)
     gamma = 0.5 - am + af
     beta = 0.25 * (1.0 - am + af) ** 2
-    M, C, K, f = coeff(t0)
     x, v = np.asarray(x0, float).copy(), np.asarray(v0, float).copy()
+    M, C, K, f = coeff(t0, x, v) if corrections else coeff(t0)
     a = np.linalg.solve(M, f - C @ v - K @ x)
-    f_prev = f
+    groups = [(slice(None), atol)] if groups is None else groups
     T, X, V, Aa = [t0], [x], [v], [a]
     t, h, nfev = t0, min(h0, t1 - t0), 1
     while t < t1 - 1e-14 * max(1.0, abs(t1)):
         h = min(h, t1 - t)
-        M, C, K, f = coeff(t + (1.0 - af) * h)
-        nfev += 1
         xp = x + h * v + (0.5 - beta) * h * h * a
         vp = v + (1 - gamma) * h * a
-        # (1−α_m) M a1 + α_m M a + (1−α_f)(C v1 + K x1) + α_f (C v + K x) = f(t_{n+1−α_f})
-        lhs = (1.0 - am) * M + (1.0 - af) * (gamma * h * C + beta * h * h * K)
-        rhs = (f - am * (M @ a) - (1.0 - af) * (C @ vp + K @ xp) - af * (C @ v + K @ x))
-        a1 = np.linalg.solve(lhs, rhs)
-        x1 = xp + beta * h * h * a1
-        v1 = vp + gamma * h * a1
-        scale = atol + rtol * max(float(np.abs(x1).max()), float(np.abs(x).max()))
-        err = float(np.abs((beta - 1.0 / 6.0) * h * h * (a1 - a)).max()) / scale
+        x1, v1, a1 = xp, vp, a
+        for _ in range(corrections + 1):
+            tm = t + (1.0 - af) * h
+            if corrections:
+                M, C, K, f = coeff(tm, (1 - af) * x1 + af * x, (1 - af) * v1 + af * v)
+            else:
+                M, C, K, f = coeff(tm)
+            nfev += 1
+            # (1−α_m) M a1 + α_m M a + (1−α_f)(C v1 + K x1) + α_f (C v + K x) = f(t_{n+1−α_f})
+            lhs = (1.0 - am) * M + (1.0 - af) * (gamma * h * C + beta * h * h * K)
+            rhs = (f - am * (M @ a) - (1.0 - af) * (C @ vp + K @ xp) - af * (C @ v + K @ x))
+            a1 = np.linalg.solve(lhs, rhs)
+            x1 = xp + beta * h * h * a1
+            v1 = vp + gamma * h * a1
+        est = np.abs((beta - 1.0 / 6.0) * h * h * (a1 - a))
+        err = max(float(est[r].max()) / (tol + rtol * max(float(np.abs(x1[r]).max()),
+                                                            float(np.abs(x[r]).max())))
+                  for r, tol in groups)
         if err <= 1.0 or h <= h_min:
             t += h
             x, v, a = x1, v1, a1
@@ -518,7 +659,6 @@ def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-
             Aa.append(a)
         h *= min(2.0, max(0.3, 0.9 * (1.0 / max(err, 1e-12)) ** (1.0 / 3.0)))
         h = max(h, h_min)
-    del f_prev
     return _NewmarkRun(np.array(T), np.array(X), np.array(V), np.array(Aa), nfev)
 
 

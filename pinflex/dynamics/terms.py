@@ -114,11 +114,17 @@ class ErlsDynamics:
         self.offsets_vary = any(
             j.attach.lin is not None and j.parent != model._order[0] and j.user_col >= 0
             for j in model._joints)
-        # the part of K that is not beam strain (joint springs, when the model has them)
-        q0 = np.zeros(self.nv)
-        e0, _ = root_twists(model, model.coord_map @ q0, model.coord_map)
+        conds = getattr(model, "joint_conditions", ())
+        locked = [c.name for c in conds if c.kind == "locked"]
+        if locked:
+            raise ConfigurationError(
+                f"the dynamics needs every joint coordinate; joints {locked} are locked in this "
+                "model: build it with joints='free' or with springs (a prescribed motion holds "
+                "the joints anyway)")
+        #: joint springs ``(user column, stiffness)`` on the physical relative motion
+        self._springs = [(model.joint_index(c.name), float(c.stiffness)) for c in conds
+                         if c.kind == "spring"]
         self._K_const = np.zeros((self.ndof, self.ndof))
-        self._K_const = model.matrices(q0, self.y)[1] - self._stiffness(e0)
 
     # ------------------------------------------------------------------ kinematics
     def _kinematics(self, q: np.ndarray):
@@ -173,6 +179,7 @@ class ErlsDynamics:
     def linear_terms(self, q):
         """``M(q)``, ``C_k(q)`` (nv, ndof, ndof), ``K(q)``, ``F(q)``; ``C(q, q̇) = Σ q̇_k C_k``."""
         q = np.asarray(q, dtype=float)
+        self._q_last = q
         J, Jd, R, e, ed = self._kinematics(q)
         nd, nx, nv = self.ndof, self.nx, self.nv
         M = np.zeros((nd, nd))
@@ -211,6 +218,10 @@ class ErlsDynamics:
     def _stiffness(self, e) -> np.ndarray:
         """``K(q) = Σ bxᵀ Ke bx`` with ``bx = sel + root e_L(q)`` (the root copy turns with q)."""
         K = self._K_const.copy()
+        if self._springs:
+            G = self.model.relative_motion_rows(self._q_last)
+            for col, k in self._springs:
+                K += k * np.outer(G[col], G[col])
         for link, a in self.model._assembly_arrays.items():
             el = e.get(link)
             bx = a["sel"] if el is None else a["sel"] + a["root"] @ el

@@ -1,0 +1,124 @@
+"""Dynamics: study tables, joint offsets and springs, frequency responses, energy."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pinflex import FlexibleModel
+from pinflex.dynamics import ErlsDynamics
+from pinflex.dynamics.frf import frf, frf_direct, linear_pose
+from pinflex.dynamics.simulate import Damping, energy, simulate_torque
+from pinflex.dynamics.study import InvalidSimulationTable, parse_simulation_table
+from pinflex.exceptions import ConfigurationError, PinflexError
+from tests import reference_fe as ref
+
+URDF = Path(__file__).resolve().parents[1] / "urdf"
+
+
+@pytest.fixture(scope="module")
+def arm():
+    """Benchmark A, planar."""
+    return FlexibleModel(URDF / "two_link.urdf", planar=True)
+
+
+def test_simulation_table_lists_every_problem():
+    """Unknown keys, wrong types and ranges come back in one named error."""
+    with pytest.raises(InvalidSimulationTable) as err:
+        parse_simulation_table({"drive": "fly", "after_s": -1, "gravity": [0, 1], "foo": 3,
+                                "damping": {"kind": "modal"}, "rtol": "x"})
+    assert isinstance(err.value, PinflexError)
+    assert len(err.value.problems) == 6
+    s = parse_simulation_table({"damping": {"kind": "rayleigh", "beta": 1e-5},
+                                "gravity": [0, -9.81, 0], "frame": "link2"})
+    assert s.damping == Damping("rayleigh", 0.0, 1e-5)
+    assert s.gravity == (0.0, -9.81, 0.0) and s.frame == "link2"
+    assert parse_simulation_table(None).drive == "prescribed"
+
+
+def test_joint_offsets_match_the_relative_motion_rows():
+    """A (the elastic offset of the ERLS joint coordinates) against the joint layer's G."""
+    for name, planar in (("two_link.urdf", True), ("ur5_flexible.xml", False)):
+        fm = FlexibleModel(URDF / name, planar=planar)
+        dyn = ErlsDynamics(fm)
+        q = np.random.default_rng(1).uniform(-1, 1, fm.nv)
+        A = dyn.joint_offsets(q)[0]
+        G = fm.relative_motion_rows(q)
+        assert np.allclose(fm.coord_map @ A, -G[:, : fm.nx], rtol=0, atol=1e-13)
+        assert np.any(A)
+
+
+def test_joint_springs_enter_the_stiffness():
+    """With joint springs K(q) still equals the assembly's."""
+    fm = FlexibleModel(URDF / "two_link.urdf", planar=True, joints={"q1": 2e4, "q2": 5e3})
+    dyn = ErlsDynamics(fm)
+    q = np.array([1.8, 5.3])
+    assert np.allclose(dyn.linear_terms(q)[2], fm.matrices(q)[1], rtol=0,
+                       atol=1e-9 * np.abs(fm.matrices(q)[1]).max())
+    with pytest.raises(ConfigurationError):
+        ErlsDynamics(FlexibleModel(URDF / "two_link.urdf", planar=True, joints="locked"))
+
+
+def test_frf_from_modes_equals_the_direct_solve(arm):
+    """Modal receptance = (K − ω²M + iωC)⁻¹ at sampled ω, free and locked joints."""
+    dyn = ErlsDynamics(arm, y=[0.1, 0.05])
+    q = np.array([1.8, 5.3])
+    tip = ("displacement", "tool", (0, 0, 0), (0, 1, 0))
+    freqs = np.array([3.0, 50.0, 190.0, 333.0, 1500.0])
+    for joints, inputs, damping in (
+            ("free", [("torque", "q1"), ("force", "tool", (0, 0, 0), (1, 1, 0))],
+             Damping("modal", ratios=(0.02, 0.01))),
+            ("locked", [("force", "link2", (0.2, 0, 0), (0, 1, 0))],
+             Damping("rayleigh", alpha=0.5, beta=2e-5))):
+        lp = linear_pose(dyn, q, inputs, [tip], damping=damping, joints=joints)
+        Hm, Hd = frf(lp, freqs), frf_direct(lp, freqs)
+        assert np.abs(Hm - Hd).max() <= 1e-9 * np.abs(Hd).max()
+    with pytest.raises(ConfigurationError):
+        linear_pose(dyn, q, [("torque", "q1")], [tip], joints="locked")
+
+
+def test_locked_static_receptance_equals_global_fe_compliance(arm):
+    """At ω → 0 the locked receptance tip/tip is the clamped frame's static compliance."""
+    y = np.array([0.1, 0.05])
+    q = np.array([1.8, 5.3])
+    dyn = ErlsDynamics(arm, y=y)
+    tip_y = ("displacement", "tool", (0, 0, 0), (0, 1, 0))
+    lp = linear_pose(dyn, q, [("force", "tool", (0, 0, 0), (0, 1, 0))], [tip_y],
+                     joints="locked")
+    h0 = frf(lp, [1e-6])[0, 0, 0].real
+    K, M = ref.planar_two_link_matrices(q, *y)
+    n = K.shape[0]
+    keep = [i for i in range(n) if i not in (0, 13)]
+    T = np.zeros((n, n - 2))
+    for col, i in enumerate(keep):
+        T[i, col] = 1.0
+    T[13, keep.index(12)] = 1.0
+    f = np.zeros(n)
+    f[21] = 1.0  # unit force along world y at the tip node
+    u = T @ np.linalg.solve(T.T @ K @ T, T.T @ f)
+    assert h0 == pytest.approx(u[21], rel=1e-9)
+
+
+def test_free_vibration_conserves_energy_to_the_tolerance(arm):
+    """No damping, no torque, free joints: T + V stays within a few rtol over 1.5 periods."""
+    y = [0.1, 0.05]
+    dyn = ErlsDynamics(arm, y=y)
+    q0 = np.array([1.8, 5.3])
+    mode = arm.modes(q0, y, n_modes=1)
+    nx = arm.nx
+    sh = mode.shapes[:, 0] * 1e-4 / np.abs(mode.shapes[:nx, 0]).max()
+    period = 1.0 / mode.freq_hz[0]
+    energies = {}
+    for rtol in (1e-3, 1e-4):
+        sim = simulate_torque(dyn, q0=q0 + sh[nx:], x0=sh[:nx], duration_s=1.5 * period,
+                              rho_inf=1.0, sample_hz=12 / period, rtol=rtol)
+        E = np.array([energy(dyn, np.r_[sim.x[i], sim.q[i]], np.r_[sim.xd[i], sim.qd[i]])
+                      for i in range(sim.times_s.size)])
+        energies[rtol] = (E.max() - E.min()) / E[0]
+        assert sim.joint_condition == "free"
+    assert energies[1e-4] <= 10 * 1e-4
+    assert energies[1e-4] < energies[1e-3]
+    assert math.isfinite(energies[1e-3])
