@@ -96,3 +96,20 @@ def test_progress_of_the_stages(setup, capsys):
         assign_frequencies(model, traj, [Target(1, 190.0)], q0=Q0, progress=True)
     err = capsys.readouterr().err
     assert "assignment stages" in err and "4/4" in err and "100%" in err
+
+
+def test_parquet_needs_pyarrow_or_round_trips(setup, tmp_path):
+    """Parquet: the same rows as the CSV when pyarrow is there, a named error when not."""
+    from pinflex.exceptions import MissingDependency
+
+    model, traj = setup
+    data = assignment_data(model, traj, _solve(model, traj))
+    try:
+        import pyarrow.parquet as pq
+    except ImportError:
+        with pytest.raises(MissingDependency, match="pip install pyarrow"):
+            data.to_parquet(tmp_path / "a.parquet")
+        return
+    table = pq.read_table(data.to_parquet(tmp_path / "a.parquet"))
+    assert table.num_rows == traj.n_samples * len(data.modes)
+    np.testing.assert_allclose(table.column("after_hz").to_numpy()[::3], data.after_hz[:, 0])

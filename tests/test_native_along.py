@@ -142,6 +142,8 @@ def test_cli_modes_along_json(tmp_path, arm, capsys):
     np.testing.assert_allclose(np.sort(data["frequencies_hz"], axis=1),
                                arm.frequencies(q)[:, :2], rtol=1e-10)
     assert main(["modes", str(robot), "--csv", "x.csv"]) == 2
+    assert main(["modes", str(robot), "--trajectory", str(tmp_path / "t.csv"), "--png"]) == 0
+    assert (tmp_path / "t_modes.png").stat().st_size > 10_000
 
 
 def test_study_path_table(tmp_path, arm):

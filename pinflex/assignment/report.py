@@ -108,7 +108,7 @@ class AssignmentData:
             import pyarrow as pa
             import pyarrow.parquet as pq
         except ImportError as exc:
-            raise MissingDependency("Parquet output needs pyarrow: pip install pyarrow") from exc
+            raise MissingDependency("pyarrow", "Parquet output") from exc
         rows = self.rows()
         table = pa.table({k: [r[k] for r in rows] for k in rows[0]})
         pq.write_table(table, str(path))

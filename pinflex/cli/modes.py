@@ -20,7 +20,9 @@ def add_parser(sub) -> None:
                    help="joint trajectory (header: t, joint names): frequencies along the "
                    "motion, modes followed by their shapes (default 3 modes)")
     p.add_argument("--csv", metavar="OUT", help="with --trajectory: write one row per sample")
-    p.add_argument("--png", metavar="OUT", help="with --trajectory: write a chart")
+    p.add_argument("--png", metavar="OUT", nargs="?", const="",
+                   help="with --trajectory: write a chart (default name: the trajectory's "
+                   "with _modes.png)")
     p.set_defaults(func=cmd_modes)
 
 
@@ -32,7 +34,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
                           joints=args.joints)
     if args.trajectory is not None:
         return _along(model, args)
-    if args.csv or args.png:
+    if args.csv or args.png is not None:
         from pinflex.exceptions import ConfigurationError
 
         raise ConfigurationError("--csv and --png go with --trajectory")
@@ -79,7 +81,12 @@ def _along(model, args: argparse.Namespace) -> int:
     res = modes_along(model, traj, modes=args.modes or 3)
     if args.csv:
         res.to_csv(args.csv)
-    if args.png:
+    if args.png is not None:
+        if not args.png:
+            from pathlib import Path
+
+            args.png = str(Path(args.trajectory).with_name(Path(args.trajectory).stem
+                                                           + "_modes.png"))
         res.plot(args.png)
     if args.json:
         print(res.to_json())
