@@ -115,6 +115,10 @@ class Planform:
         """Full width w(s) at abscissae s [m]."""
         return 2.0 * np.interp(s, self.x_m, self.half_width_m)
 
+    def thickness_at(self, s: np.ndarray | float) -> np.ndarray:
+        """Thickness t(s) at abscissae s [m] (uniform here)."""
+        return np.full(np.shape(s), float(self.thickness_m))
+
     def area_m2(self, s: np.ndarray | float) -> np.ndarray:
         """Cross-section area A(s) = w(s) t [m^2]."""
         return self.width_m(s) * self.thickness_m
@@ -271,6 +275,17 @@ def _partial_integrals(planform: Planform, s_m: np.ndarray) -> np.ndarray:
     return table[piece] + partial
 
 
+def compliance_between(planform: Planform, bounds_m: np.ndarray) -> np.ndarray:
+    """Bending compliances int dx / EI of consecutive segments of trusted bounds [1/(N m)]."""
+    x = planform.x_m
+    s_m = np.asarray(bounds_m, dtype=float)
+    piece = np.clip(np.searchsorted(x, s_m, side="right") - 1, 0, x.size - 2)
+    left = x[piece]
+    inv = planform._cumulative_integrals[piece, 4] + (s_m - left) * _log_mean_inverse(
+        planform.area_moment_m4(left), planform.area_moment_m4(s_m))
+    return np.diff(inv) / planform.material.youngs_modulus_pa
+
+
 def chain_segments(planform: Planform, bounds_m: np.ndarray) -> list[SegmentProperties]:
     """Properties of consecutive segments [b0, b1], [b1, b2], ... in one vectorised pass.
 
@@ -295,6 +310,21 @@ def chain_segments(planform: Planform, bounds_m: np.ndarray) -> list[SegmentProp
         raise InvalidBeam(f"segment bounds {np.round(bounds, 9).tolist()} must increase "
                           f"strictly inside [0, L = {length:g}] m")
     bounds = np.minimum(bounds, length)
+    arrays = segment_arrays(planform, bounds)
+    mass, com, ixx, iyy, izz, mean_i, comp = arrays
+    return [SegmentProperties(float(bounds[k]), float(bounds[k + 1]), float(mass[k]),
+                              float(com[k]), (float(ixx[k]), float(iyy[k]), float(izz[k])),
+                              float(mean_i[k]), float(comp[k]))
+            for k in range(bounds.size - 1)]
+
+
+def segment_arrays(planform: Planform, bounds_m: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Array form of :func:`chain_segments` for trusted, increasing bounds (no checks).
+
+    Returns:
+        (mass, com, ixx, iyy, izz, mean_area_moment, compliance), each shape (k,).
+    """
+    bounds = np.asarray(bounds_m, dtype=float)
     m0, m1, m2, w3, inv_i = np.diff(_partial_integrals(planform, bounds), axis=0).T
     t = planform.thickness_m
     rho_t = planform.material.density_kg_m3 * t
@@ -304,13 +334,9 @@ def chain_segments(planform: Planform, bounds_m: np.ndarray) -> list[SegmentProp
     ixx = rho_t * (w3 + t**2 * m0) / 12.0
     iyy = bending + mass * t**2 / 12.0
     izz = bending + rho_t * w3 / 12.0
-    seg_len = np.diff(bounds)
-    mean_i = m0 * t**3 / 12.0 / seg_len
+    mean_i = m0 * t**3 / 12.0 / np.diff(bounds)
     comp = inv_i / planform.material.youngs_modulus_pa
-    return [SegmentProperties(float(bounds[k]), float(bounds[k + 1]), float(mass[k]),
-                              float(com[k]), (float(ixx[k]), float(iyy[k]), float(izz[k])),
-                              float(mean_i[k]), float(comp[k]))
-            for k in range(seg_len.size)]
+    return mass, com, ixx, iyy, izz, mean_i, comp
 
 
 def segment_properties(planform: Planform, start_m: float, end_m: float) -> SegmentProperties:

@@ -42,6 +42,9 @@ from .problem import (
     evaluate,
     static_stiffness,
 )
+from .sensitivity import ChainWorkspace, WarmStarts, evaluate_with_jacobian
+
+JACOBIANS = ("analytic", "finite-difference")
 
 
 @dataclass(frozen=True)
@@ -152,26 +155,69 @@ def _weights(problem: MappingProblem, kind: str, weight: float | None) -> tuple[
     return {"eigen": (1.0, 0.0), "deflection": (0.0, 1.0)}.get(kind, (1.0, 1.0))
 
 
-def _residual_function(problem: MappingProblem, kind: str, weight: float | None = None):
-    r"""Residuals r(x) with :math:`\|r\|^2 = w_e e_{eig}^2 + w_d e_{defl}^2` plus a gauge term.
+class Objective:
+    r"""Residuals :math:`r(x)` with :math:`\|r\|^2 = w_e e_{eig}^2 + w_d e_{defl}^2` + gauge term.
 
     The losses only see the normalised fractions :math:`\gamma/\sum\gamma`, so the residual
     :math:`\sum\gamma - 1` pins the scale and enforces eq. (15b).
-    """
-    w_eig, w_defl = _weights(problem, kind, weight)
-    n1 = problem.n_joints + 1
-    n_eig = problem.poses.shape[0] * problem.n_modes
 
-    def fun(x: np.ndarray) -> np.ndarray:
-        ev = evaluate(problem, x, deflection=w_defl > 0.0)
-        res = ev.residuals
-        parts = [np.sqrt(w_eig) * res[:n_eig]]
-        if w_defl > 0.0:
-            parts.append(np.sqrt(w_defl) * res[n_eig:])
-        parts.append([np.sum(x[:n1]) - 1.0])
+    ``jacobian="analytic"`` (default) evaluates on one chain updated in place and returns the
+    exact Jacobian (:mod:`pinflex.prbdm.sensitivity`); ``"finite-difference"`` is the reference
+    path (a new chain per evaluation, scipy's 2-point differences). The warm starts of the
+    tip statics are this object's explicit state, one per search.
+    """
+
+    def __init__(self, problem: MappingProblem, kind: str, weight: float | None = None,
+                 jacobian: str = "analytic"):
+        if jacobian not in JACOBIANS:
+            raise InvalidChain(f"jacobian = {jacobian!r}; expected one of {JACOBIANS}")
+        self.problem = problem
+        self.w_eig, self.w_defl = _weights(problem, kind, weight)
+        self.jacobian_kind = jacobian
+        self.warm = WarmStarts()
+        self.workspace = ChainWorkspace(problem.planform, problem.n_joints) \
+            if jacobian == "analytic" else None
+        self.n_eig = problem.poses.shape[0] * problem.n_modes
+        self.n_evaluations = 0
+        self._cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def _weighted(self, res: np.ndarray, x: np.ndarray) -> np.ndarray:
+        n1 = self.problem.n_joints + 1
+        parts = [np.sqrt(self.w_eig) * res[: self.n_eig]]
+        if self.w_defl > 0.0:
+            parts.append(np.sqrt(self.w_defl) * res[self.n_eig:])
+        parts.append(np.array([np.sum(x[:n1]) - 1.0]))
         return np.concatenate(parts)
 
-    return fun
+    def _compute(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if self._cache is not None and np.array_equal(self._cache[0], x):
+            return self._cache
+        self.n_evaluations += 1
+        n1 = self.problem.n_joints + 1
+        assert self.workspace is not None
+        je = evaluate_with_jacobian(self.problem, x, self.workspace, self.warm,
+                                    deflection=self.w_defl > 0.0, pinocchio=False)
+        jac = je.jacobian
+        rows = [np.sqrt(self.w_eig) * jac[: self.n_eig]]
+        if self.w_defl > 0.0:
+            rows.append(np.sqrt(self.w_defl) * jac[self.n_eig:])
+        gauge = np.zeros((1, x.size))
+        gauge[0, :n1] = 1.0
+        rows.append(gauge)
+        self._cache = (np.array(x), self._weighted(je.evaluation.residuals, x), np.vstack(rows))
+        return self._cache
+
+    def fun(self, x: np.ndarray) -> np.ndarray:
+        """Residual vector at x."""
+        if self.workspace is not None:
+            return self._compute(x)[1]
+        self.n_evaluations += 1
+        ev = evaluate(self.problem, x, deflection=self.w_defl > 0.0, warm=self.warm)
+        return self._weighted(ev.residuals, x)
+
+    def jac(self, x: np.ndarray) -> np.ndarray:
+        """Exact Jacobian of :meth:`fun` at x (analytic path only)."""
+        return self._compute(x)[2]
 
 
 def _bounds(problem: MappingProblem) -> tuple[np.ndarray, np.ndarray]:
@@ -194,7 +240,7 @@ def start_points(problem: MappingProblem, n_starts: int, seed: int) -> np.ndarra
     for _ in range(n_starts):
         gamma = MIN_FRACTION + free * rng.dirichlet(np.ones(n1))
         x = np.concatenate([gamma, np.zeros(problem.n_stiffness_params)])
-        ev = evaluate(problem, x, deflection=False)
+        ev = final_evaluation(problem, x, "analytic", deflection=False)
         scale = problem.truth_hz[0] / ev.model_hz[:, 0]
         log_k = 2.0 * np.log(scale)
         if problem.stiffness_law == "segment":
@@ -205,14 +251,16 @@ def start_points(problem: MappingProblem, n_starts: int, seed: int) -> np.ndarra
 
 
 def _local(problem: MappingProblem, kind: str, x0: np.ndarray, weight: float | None = None,
-           max_nfev: int | None = None) -> np.ndarray:
+           max_nfev: int | None = None, jacobian: str = "analytic") -> np.ndarray:
     """Bounded trust-region least squares (scipy ``least_squares``, 'trf') from x0."""
     lower, upper = _bounds(problem)
     x0 = np.clip(x0, lower + 1e-12, upper - 1e-12)
     # A perfect frequency fit is reachable, so eigen-only runs to round-off; with deflection the
     # optimum has a non-zero residual and a relative cost change of 1e-9 is plenty.
     tol = 1e-12 if kind == "eigen" else 1e-9
-    result = least_squares(_residual_function(problem, kind, weight), x0, bounds=(lower, upper),
+    objective = Objective(problem, kind, weight, jacobian)
+    jac = objective.jac if jacobian == "analytic" else "2-point"
+    result = least_squares(objective.fun, x0, jac=jac, bounds=(lower, upper),
                            method="trf", ftol=tol, xtol=tol, gtol=tol,
                            max_nfev=max_nfev or (40 if kind == "eigen" else 10) * problem.n_params)
     x = np.asarray(result.x, dtype=float)
@@ -220,6 +268,20 @@ def _local(problem: MappingProblem, kind: str, x0: np.ndarray, weight: float | N
     x[:n1] = np.clip(x[:n1], MIN_FRACTION, 1.0 - MIN_FRACTION)
     x[:n1] /= x[:n1].sum()
     return x
+
+
+def final_evaluation(problem: MappingProblem, x: np.ndarray, jacobian: str = "analytic",
+                     deflection: bool = True) -> Evaluation:
+    """Losses of a found design from a cold start (no warm starts): the reported numbers.
+
+    The analytic path evaluates on a fresh in-place chain; the finite-difference path on a
+    newly built chain (:func:`~pinflex.prbdm.problem.evaluate`); both give the same numbers.
+    """
+    if jacobian == "analytic":
+        return evaluate_with_jacobian(problem, x, ChainWorkspace(problem.planform,
+                                                                 problem.n_joints),
+                                      deflection=deflection, want_jacobian=False).evaluation
+    return evaluate(problem, x, deflection=deflection)
 
 
 def _score(ev: Evaluation, kind: str) -> float:
@@ -232,7 +294,7 @@ def _score(ev: Evaluation, kind: str) -> float:
 
 def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int = 0,
                progress: bool = False, starts: np.ndarray | None = None,
-               keep_all: bool = False):
+               keep_all: bool = False, jacobian: str = "analytic"):
     """Best local least-squares solution over multistart points for one objective.
 
     Args:
@@ -243,6 +305,7 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
         progress: Show a progress bar on stderr.
         starts: Explicit start designs, shape (k, n_params).
         keep_all: Return every successful local solution, best first, instead of the best.
+        jacobian: ``"analytic"`` or ``"finite-difference"`` (see :class:`Objective`).
 
     Returns:
         ``(x, evaluation)`` of the best solution, or the list of all of them.
@@ -255,8 +318,8 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
     bar = ProgressBar(len(points), f"{problem.n_joints}R {kind}", progress)
     for x0 in points:
         try:
-            x = _local(problem, kind, x0)
-            ev = evaluate(problem, x)
+            x = _local(problem, kind, x0, jacobian=jacobian)
+            ev = final_evaluation(problem, x, jacobian)
         except (InvalidChain, np.linalg.LinAlgError, ValueError):
             bar.update(min((_score(e, kind) for _, e in found), default=np.inf))
             continue
@@ -272,7 +335,8 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
 
 def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.ndarray,
                  n_points: int = 7, progress: bool = False,
-                 extra: list | None = None) -> list[tuple[np.ndarray, Evaluation]]:
+                 extra: list | None = None,
+                 jacobian: str = "analytic") -> list[tuple[np.ndarray, Evaluation]]:
     """Weighted-sum Pareto front between the eigen and deflection anchors.
 
     For weights w evenly spaced in (0, 1), minimise :math:`w e_{eig}^2 + (1 - w) e_{defl}^2`,
@@ -280,8 +344,9 @@ def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.
     points are dropped. (A weighted sum finds the convex hull of the front; the anchors close
     its ends.) ``extra`` designs, as (x, evaluation) pairs, join the front.
     """
-    points = [(eigen_x, evaluate(problem, eigen_x)),
-              (deflection_x, evaluate(problem, deflection_x))] + list(extra or [])
+    points = [(eigen_x, final_evaluation(problem, eigen_x, jacobian)),
+              (deflection_x, final_evaluation(problem, deflection_x, jacobian))] \
+        + list(extra or [])
     hub = min(points, key=lambda p: p[1].combined_error)[0]
     bar = ProgressBar(n_points, f"{problem.n_joints}R pareto", progress)
     previous = eigen_x
@@ -289,10 +354,10 @@ def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.
         best = None
         for x0 in (previous, hub):
             try:
-                x = _local(problem, "weighted", x0, weight=weight)
+                x = _local(problem, "weighted", x0, weight=weight, jacobian=jacobian)
             except (InvalidChain, np.linalg.LinAlgError, ValueError):
                 continue
-            ev = evaluate(problem, x)
+            ev = final_evaluation(problem, x, jacobian)
             value = weight * ev.eigen_error**2 + (1.0 - weight) * ev.deflection_error**2
             if best is None or value < best[0]:
                 best = (value, x, ev)
@@ -314,7 +379,7 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
               objective: str = "eigen", stiffness_law: str = "segment",
               poses: str | np.ndarray = "straight", n_starts: int = 16, seed: int = 0,
               truth: TruthData | None = None, pareto_points: int = 7,
-              progress: bool = False) -> PrbdmFit:
+              progress: bool = False, jacobian: str = "analytic") -> PrbdmFit:
     """Fit an nR PRBDM to a beam.
 
     Args:
@@ -331,6 +396,8 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         truth: Precomputed truth (:func:`~pinflex.prbdm.problem.compute_truth`).
         pareto_points: Interior weights of the Pareto sweep.
         progress: Show a progress bar on stderr.
+        jacobian: ``"analytic"`` (exact derivatives on one chain updated in place, default) or
+            ``"finite-difference"`` (the reference path, about ten times slower).
 
     Returns:
         The fit; for ``"pareto"`` the front is in ``fit.pareto`` and the returned model is the
@@ -346,20 +413,22 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
     problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth)
     front: list[tuple[np.ndarray, Evaluation]] = []
     if objective in ("pareto", "combined"):
-        eigen_all = multistart(problem, "eigen", n_starts, seed, progress, keep_all=True)
+        eigen_all = multistart(problem, "eigen", n_starts, seed, progress, keep_all=True,
+                               jacobian=jacobian)
         x_e = eigen_all[0][0]
         # Homotopy from the frequency-matching manifold: the eigen solutions that already
         # deflect best are the starts of the combined search.
         seeds = sorted(eigen_all, key=lambda p: p[1].combined_error)[: max(2, n_starts // 2)]
         x, ev = multistart(problem, "combined", starts=np.array([p[0] for p in seeds]),
-                           progress=progress)
+                           progress=progress, jacobian=jacobian)
         if objective == "pareto":
             x_d, _ = multistart(problem, "deflection", progress=progress,
-                                starts=np.array([x, seeds[0][0]]))
-            front = pareto_front(problem, x_e, x_d, pareto_points, progress, extra=[(x, ev)])
+                                starts=np.array([x, seeds[0][0]]), jacobian=jacobian)
+            front = pareto_front(problem, x_e, x_d, pareto_points, progress, extra=[(x, ev)],
+                                 jacobian=jacobian)
             x, ev = min(front + [(x, ev)], key=lambda p: p[1].combined_error)
     else:
-        x, ev = multistart(problem, objective, n_starts, seed, progress)
+        x, ev = multistart(problem, objective, n_starts, seed, progress, jacobian=jacobian)
     return _make_fit(problem, x, ev, objective, n_starts, front)
 
 

@@ -30,7 +30,7 @@ Loads are dead tip forces perpendicular to the undeformed beam with
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -72,9 +72,8 @@ class MappingProblem:
         stiffness_law: ``"segment"`` or ``"paper"``.
         alphas: Load levels :math:`\alpha = PL^2/EI_{eq}`, shape (l,).
 
-    The private ``_warm`` cache keeps each load's last converged joint angles so the next
-    design's Newton solve starts there; it never changes a returned answer beyond the Newton
-    tolerance, because every answer passes the same convergence and branch checks.
+    The problem holds no state: warm starts of the tip statics are an explicit argument of
+    :func:`evaluate` (a :class:`~pinflex.prbdm.sensitivity.WarmStarts`).
     """
 
     planform: Planform
@@ -86,7 +85,6 @@ class MappingProblem:
     truth_tips_m: np.ndarray
     stiffness_law: str
     alphas: np.ndarray
-    _warm: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def n_stiffness_params(self) -> int:
@@ -262,7 +260,7 @@ def design_chain(problem: MappingProblem, x: np.ndarray) -> PrbdmChain:
 
 
 def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
-             load_steps: int = 4) -> Evaluation:
+             load_steps: int = 4, warm=None) -> Evaluation:
     """Losses of design vector x (see the module docstring).
 
     Args:
@@ -271,6 +269,12 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
         deflection: Whether to solve tip statics (skipped for eigen-only searches).
         load_steps: Load increments of each cold Newton solve; warm starts from the last
             converged angles of the same load use one step.
+        warm: Optional :class:`~pinflex.prbdm.sensitivity.WarmStarts` (explicit state of the
+            caller: the last converged angles per load, updated here).
+
+    This reference path builds a new chain for every design; the fits use
+    :func:`~pinflex.prbdm.sensitivity.evaluate_with_jacobian` (same numbers, one model
+    updated in place, exact Jacobian).
     """
     gamma, factors = decode(problem, x)
     gamma = gamma / gamma.sum()
@@ -296,7 +300,7 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
     if deflection and n_loads:
         undeformed = np.array([problem.planform.length_m, 0.0])
         for ell, force in enumerate(problem.forces_n):
-            tips[ell], ok = _solve_load(problem, chain, data, ell, force, load_steps)
+            tips[ell], ok = _solve_load(chain, data, ell, force, load_steps, warm)
             failed += not ok
             truth = problem.truth_tips_m[ell]
             miss = np.linalg.norm(tips[ell] - truth) if ok else np.nan
@@ -312,16 +316,17 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
                       residuals, float(np.sqrt(np.mean(eq16**2))))
 
 
-def _solve_load(problem: MappingProblem, chain: PrbdmChain, data: pin.Data, index: int,
-                force: np.ndarray, load_steps: int) -> tuple[np.ndarray, bool]:
-    """Tip of one load, warm-started from the last converged angles of that load."""
-    warm = problem._warm.get((index, chain.n_joints))
-    attempts = [(warm, 1), (None, load_steps)] if warm is not None else [(None, load_steps)]
-    for start, steps in attempts:
+def _solve_load(chain: PrbdmChain, data: pin.Data, index: int, force: np.ndarray,
+                load_steps: int, warm) -> tuple[np.ndarray, bool]:
+    """Tip of one load, warm-started from ``warm`` (if given) and cold otherwise."""
+    start = None if warm is None else warm.angles.get(index)
+    attempts = [(start, 1), (None, load_steps)] if start is not None else [(None, load_steps)]
+    for theta0, steps in attempts:
         try:
-            result = solve_tip_statics(chain, force, start, load_steps=steps, data=data)
+            result = solve_tip_statics(chain, force, theta0, load_steps=steps, data=data)
         except NewtonDivergence:
             continue
-        problem._warm[(index, chain.n_joints)] = np.array(result.theta)
+        if warm is not None:
+            warm.angles[index] = np.array(result.theta)
         return result.tip_m, True
     return np.full(2, np.nan), False
