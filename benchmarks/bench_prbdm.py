@@ -1,13 +1,19 @@
-"""PRBDM benchmark: truth validation, loss table against paper 001, speed against accuracy.
+"""PRBDM benchmark: truth, paper 001 side by side, classic PRBMs, Pareto, SCF, speed.
 
 Run ``python benchmarks/bench_prbdm.py`` (all sections) or pick sections with
-``--sections truth table chart speed condition``. Prints plain text; the chart is written as a
-PNG (``--out``, default ``prbdm_speed_accuracy.png`` in the working directory).
+``--sections truth table chart speed condition fitspeed paper classic pareto scf equal``.
+``--quick`` runs small versions (fewer starts, rounds and models); ``--json FILE`` writes the
+numbers of the new sections as one JSON object. Charts go to ``--outdir`` (default: the
+working directory). Speed ratios are measured interleaved in one process (CPU time, one BLAS
+thread); the machine may be loaded by other work, which the output reports.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import time
 
 import numpy as np
 from timing import best_of as best_time
@@ -189,15 +195,305 @@ def section_condition() -> None:
               f"tip-Jacobian singular values at 0: {np.array2string(sv, precision=3)}")
 
 
+RESULTS: dict = {}
+
+
+def _load() -> str:
+    load = os.getloadavg()
+    return f"load average {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} on {os.cpu_count()} cores"
+
+
+def _x_of(fit) -> np.ndarray:
+    return np.concatenate([fit.link_fractions, np.log(fit.correction_factors)])
+
+
+def section_fitspeed(quick: bool) -> None:
+    """Analytic-Jacobian fits against the finite-difference path, interleaved per beam."""
+    seeds = [0] if quick else [0, 1, 2]
+    n, starts, rounds = (3, 4, 3) if quick else (4, 8, 5)
+    truths = {s: compute_truth(random_beam(s), 5) for s in seeds}
+    times: dict = {"analytic": [], "finite-difference": []}
+    losses: dict = {"analytic": [], "finite-difference": []}
+    for _ in range(rounds):
+        for seed in seeds:
+            for jac in ("analytic", "finite-difference"):
+                t0 = time.process_time()
+                fit = fit_prbdm(random_beam(seed), n, n, "combined", n_starts=starts, seed=seed,
+                                truth=truths[seed], jacobian=jac)
+                times[jac].append(time.process_time() - t0)
+                losses[jac].append(fit.combined_error)
+    a, f = np.array(times["analytic"]), np.array(times["finite-difference"])
+    ratio = f / a
+    print(f"== fit speed: {n}R combined fit, {starts} starts, beams {seeds}, {rounds} rounds "
+          f"interleaved, CPU seconds per beam ({_load()})")
+    print(f"   analytic Jacobian   median {np.median(a):.2f} s  range {a.min():.2f}-{a.max():.2f}")
+    print(f"   finite differences  median {np.median(f):.2f} s  range {f.min():.2f}-{f.max():.2f}")
+    print(f"   ratio per beam      median {np.median(ratio):.1f}x  range "
+          f"{ratio.min():.1f}-{ratio.max():.1f}x (target >= 10x)")
+    gap = np.max(np.abs(np.array(losses["analytic"]) - np.array(losses["finite-difference"])))
+    print(f"   same optimum: largest combined-loss difference {gap:.1e}")
+    RESULTS["fitspeed"] = {"n_joints": n, "starts": starts, "beams": seeds, "rounds": rounds,
+                           "analytic_s": a.tolist(), "fd_s": f.tolist(),
+                           "ratio_median": float(np.median(ratio)), "load": _load()}
+
+
+def section_paper(seed: int, starts: int, quick: bool) -> None:
+    """Every loss by the paper's definitions beside pinflex's own, and the paper's numbers."""
+    from pinflex.prbdm.paper import (
+        PAPER_PUBLISHED,
+        eq14_reference,
+        paper_losses,
+        paper_problem,
+        polish_eq15a,
+    )
+    from pinflex.prbdm.problem import build_problem, reference_stiffness
+
+    beam = random_beam(seed)
+    truth = compute_truth(beam, 5)
+    gamma = np.array([0.2, 0.3, 0.1, 0.25, 0.15])
+    prob = build_problem(beam, 4, 4, "paper", "paper", truth)
+    width_free = eq14_reference(beam, gamma[1:] * beam.length_m)
+    print(f"== paper 001's definitions beside pinflex's, random beam seed {seed} (p = 10)")
+    print("   eq. 14 sqrt(E I_j / m_j) against sqrt(E t^2 / (12 rho L_j)) (width-free): max rel "
+          f"diff {np.max(np.abs(reference_stiffness(prob, gamma) / width_free - 1)):.1e}")
+    print("   loads: dead transverse tip forces, alpha = PL^2/EI_eq = "
+          + ", ".join(f"{a:g}" for a in truth.alphas) + " (the paper does not give its loads)")
+    rows = []
+    for n in ((3, 4) if quick else (3, 4, 5)):
+        ours = fit_prbdm(beam, n, n, "combined", n_starts=starts, seed=seed, truth=truth)
+        ours_prob = build_problem(beam, n, n, "straight", "segment", truth)
+        pl_ours = paper_losses(ours_prob, _x_of(ours))
+        pap_prob = paper_problem(beam, n, truth)
+        pap = fit_prbdm(beam, n, n, "eigen", "paper", pap_prob.poses, n_starts=starts,
+                        seed=seed, truth=truth, metrics="paper")
+        x_pap = polish_eq15a(pap_prob, _x_of(pap))
+        pl_pap = paper_losses(pap_prob, x_pap)
+        from pinflex.prbdm.problem import evaluate
+        ev_pap = evaluate(pap_prob, x_pap)
+        rows.append({"n": n, "ours_eigen": ours.eigen_error, "ours_defl": ours.deflection_error,
+                     "ours_combined": ours.combined_error,
+                     "ours_paper_defs": pl_ours.as_percent(),
+                     "paper_method_defs": pl_pap.as_percent(),
+                     "paper_method_per_mode_rms": ev_pap.eigen_error,
+                     "paper_method_disp_defl": ev_pap.deflection_error,
+                     "n_poses": pl_pap.n_poses, "published": {
+                         k: PAPER_PUBLISHED[k].get(n) for k in ("eigen", "combined")}})
+    print("   all losses in %; 'sum' = eq. 15a literally (sum of eq. 16 over the m poses), "
+          "'mean' = sum / m; eq. 19 RMS over our loads; eq. 27 = sqrt(eq.15a^2 + eq.19^2)")
+    print("   model | pinflex fit (segment law, straight, combined): pinflex defs eigen/defl/"
+          "combined | same fit by paper defs at the paper's poses (eps 0.1): 15a sum/mean, 19, 27"
+          " | paper method (eq.14 law, eq.10-11 poses, eigen-only): 15a sum/mean, 19, 27 | "
+          "paper published eigen / combined")
+    for r in rows:
+        o, q = r["ours_paper_defs"], r["paper_method_defs"]
+        print(f"   {r['n']}R | {100 * r['ours_eigen']:.4f} / {100 * r['ours_defl']:.4f} / "
+              f"{100 * r['ours_combined']:.4f} | {o['eq15a_sum']:.3f} / {o['eq15a_mean']:.3f}, "
+              f"{o['eq19_rms']:.4f}, {o['eq27_sum']:.3f} | {q['eq15a_sum']:.4f} / "
+              f"{q['eq15a_mean']:.4f} (m = {r['n_poses']}), {q['eq19_rms']:.3f}, "
+              f"{q['eq27_sum']:.3f} | {r['published']['eigen']} / {r['published']['combined']}")
+    RESULTS["paper"] = {"seed": seed, "starts": starts, "rows": rows}
+
+
+def section_classic(seed: int, starts: int, quick: bool) -> None:
+    """Howell 1R and Su 3R on the same beams and loads as the fitted PRBDMs, one table."""
+    from pinflex.prbdm.classic import CLASSIC_MODELS
+    from pinflex.prbdm.problem import build_problem, evaluate, reference_stiffness
+
+    beams = [("uniform", uniform_beam())] + ([] if quick else [(f"random seed {seed}",
+                                                                 random_beam(seed))])
+    table = []
+    print("== classic PRBMs beside fitted PRBDMs (same beams, same loads alpha = 0.5 1 2 5);"
+          " eigen = RMS per-mode relative error over the model's own n modes at theta = 0;"
+          " defl = RMS tip error over the tip displacement; eq19 = over the tip position; %")
+    for label, beam in beams:
+        truth = compute_truth(beam, 5)
+        models = []
+        for model in CLASSIC_MODELS:
+            n = len(model.stiffness_coefficients)
+            prob = build_problem(beam, n, n, "straight", "segment", truth)
+            chain = model.chain(beam)
+            g = np.array(model.link_fractions)
+            x = np.concatenate([g, np.log(chain.stiffness_nm_rad
+                                          / reference_stiffness(prob, g))])
+            models.append((model.name, evaluate(prob, x)))
+        for n in ((3,) if quick else (1, 2, 3, 4, 5)):
+            fit = fit_prbdm(beam, n, n, "combined", n_starts=starts, seed=seed, truth=truth)
+            prob = build_problem(beam, n, n, "straight", "segment", truth)
+            models.append((f"PRBDM {n}R (fitted, combined)", evaluate(prob, _x_of(fit))))
+        print(f"   {label}:")
+        for name, ev in models:
+            mode1 = abs(ev.model_hz[0, 0] / truth.modes.freq_hz[0] - 1)
+            print(f"     {name:30s} mode 1 {100 * mode1:8.4f}  eigen {100 * ev.eigen_error:8.4f}"
+                  f"  defl {100 * ev.deflection_error:8.4f}  eq19 "
+                  f"{100 * ev.deflection_error_position:8.4f}")
+            table.append({"beam": label, "model": name, "mode1": float(mode1),
+                          "eigen": ev.eigen_error, "defl": ev.deflection_error,
+                          "eq19": ev.deflection_error_position})
+    print("   Kimball-Tsai 2R: its parameters were not available to us; the fitted 2R row "
+          "stands in for a 2R model")
+    RESULTS["classic"] = table
+
+
+def section_pareto(seed: int, starts: int, quick: bool, outdir: str) -> None:
+    """Epsilon-constraint Pareto front with its hypervolume beside the weighted sums."""
+    from pinflex.prbdm.mapping import multistart, pareto_front
+    from pinflex.prbdm.pareto import epsilon_constraint_front, hypervolume_2d, nondominated
+    from pinflex.prbdm.problem import build_problem
+
+    beam = random_beam(seed)
+    truth = compute_truth(beam, 5)
+    out = {}
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    for n in ((3,) if quick else (3, 4, 5)):
+        prob = build_problem(beam, n, n, "straight", "segment", truth)
+        eig = multistart(prob, "eigen", starts, seed, keep_all=True)
+        x_c, ev_c = multistart(prob, "combined", starts=np.array([p[0] for p in sorted(
+            eig, key=lambda p: p[1].combined_error)[: max(2, starts // 2)]]))
+        x_d, _ = multistart(prob, "deflection", starts=np.array([x_c]))
+        ws = pareto_front(prob, eig[0][0], x_d, 5 if quick else 9, extra=[(x_c, ev_c)])
+        ws_pts = np.array([[p[1].eigen_error, p[1].deflection_error] for p in ws])
+        d_lo, d_hi = ws_pts[:, 1].min(), ws_pts[:, 1].max()
+        ladder = np.geomspace(max(d_lo, 1e-6), max(d_hi, 2 * d_lo), 6 if quick else 12)
+        ec = epsilon_constraint_front(prob, [p[0] for p in ws], ladder)
+        ec_pts = np.array([[p[1].eigen_error, p[1].deflection_error] for p in ec]
+                          ).reshape(-1, 2)
+        both = np.vstack([ws_pts, ec_pts])
+        ref = (float(both[:, 0].max() * 1.1), float(both[:, 1].max() * 1.1))
+        hv_ws = hypervolume_2d(ws_pts, ref)
+        hv_all = hypervolume_2d(both[nondominated(both)], ref)
+        try:
+            from pymoo.indicators.hv import HV
+
+            hv_check = float(HV(ref_point=np.array(ref))(both[nondominated(both)]))
+        except ImportError:  # pragma: no cover - optional
+            hv_check = float("nan")
+        print(f"== Pareto {n}R: weighted sums {len(ws_pts)} points, epsilon-constraint "
+              f"{len(ec_pts)} points; hypervolume up to {ref} : weighted sums {hv_ws:.3e}, "
+              f"with the epsilon-constraint points {hv_all:.3e} (pymoo HV {hv_check:.3e})")
+        out[n] = {"weighted": ws_pts.tolist(), "eps": ec_pts.tolist(), "ref": ref,
+                  "hv_weighted": hv_ws, "hv_all": hv_all, "hv_pymoo": hv_check}
+        line = ax.plot(100 * ws_pts[:, 0], 100 * ws_pts[:, 1], "o", mfc="none",
+                       label=f"{n}R weighted sums")[0]
+        if len(ec_pts):
+            order = np.argsort(ec_pts[:, 1])
+            ax.plot(100 * ec_pts[order, 0], 100 * ec_pts[order, 1], "-x",
+                    color=line.get_color(), label=f"{n}R epsilon-constraint")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("frequency loss (RMS per-mode) [%]")
+    ax.set_ylabel("deflection loss (over the tip displacement) [%]")
+    ax.set_title(f"Pareto fronts, random beam seed {seed}")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    path = os.path.join(outdir, "prbdm_pareto.png")
+    fig.savefig(path, dpi=130)
+    print(f"   chart written to {path}")
+    RESULTS["pareto"] = out
+
+
+def section_scf(seed: int, starts: int, quick: bool, outdir: str) -> None:
+    """Paper Figs. 8/10: stiffness correction factor against deflection angle (eq. 25-26)."""
+    from pinflex.prbdm.paper import paper_problem
+
+    beam = random_beam(seed)
+    truth = compute_truth(beam, 5)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    ax2 = ax.twinx()
+    out = {}
+    for n in ((4,) if quick else (4, 5)):
+        prob = paper_problem(beam, n, truth)
+        fit = fit_prbdm(beam, n, n, "eigen", "paper", prob.poses, n_starts=starts, seed=seed,
+                        truth=truth, metrics="paper")
+        k = np.array(fit.correction_factors)
+        angle = np.degrees(prob.poses[:, 0])
+        mean = k.mean()                                  # eq. 25
+        pct = 100 * (k - mean) / mean                    # eq. 26
+        slope, icept = np.polyfit(angle, k, 1)
+        r = np.corrcoef(angle, k)[0, 1]
+        print(f"== SCF {n}R (eq. 14 law, eps 0.1, {len(k)} poses): SCF_mean {mean:.4g}; "
+              f"linear fit k = {icept:.4g} + {slope:.4g} * angle[deg], r = {r:.4f}; eq. 26 "
+              f"range {pct.min():.2f} .. {pct.max():.2f} %")
+        line = ax.plot(angle, k, "o-", label=f"{n}R SCF")[0]
+        ax2.plot(angle, pct, ":", color=line.get_color())
+        out[n] = {"angle_deg": angle.tolist(), "scf": k.tolist(), "mean": mean,
+                  "slope": slope, "r": r}
+    ax.set_xlabel("joint deflection angle xi + i eps [deg]")
+    ax.set_ylabel("stiffness correction factor k_i")
+    ax2.set_ylabel("(k_i - SCF_mean) / SCF_mean [%] (dotted)")
+    ax.set_title(f"SCF trend (paper Figs. 8, 10), random beam seed {seed}")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    path = os.path.join(outdir, "prbdm_scf.png")
+    fig.savefig(path, dpi=130)
+    print(f"   chart written to {path}")
+    RESULTS["scf"] = out
+
+
+def section_equal(seed: int, starts: int, quick: bool) -> None:
+    """Chain against the beam FE of equal accuracy, and the fit's cost amortised over uses."""
+    beam = random_beam(seed)
+    truth = compute_truth(beam, 5)
+    out = []
+    print(f"== speed at equal accuracy, random beam seed {seed} ({_load()})")
+    for n in ((4,) if quick else (3, 4, 5)):
+        t0 = time.process_time()
+        fit = fit_prbdm(beam, n, n, "combined", n_starts=starts, seed=seed, truth=truth)
+        t_fit = time.process_time() - t0
+        chain = build_chain(beam, np.array(fit.link_fractions), np.array(fit.stiffness))
+        data = chain.model.createData()
+        err_chain = np.max(np.abs(chain_frequencies(chain, None, data)[:n]
+                                  / truth.modes.freq_hz[:n] - 1))
+        n_el, nodes = None, None
+        for count in range(2, 400):
+            nodes = beam_mesh(beam, beam.length_m / count)
+            lam = fe_eigenvalues(beam, nodes, n)
+            err = np.max(np.abs(np.sqrt(lam) / (2 * np.pi) / truth.modes.freq_hz[:n] - 1))
+            if err <= err_chain:
+                n_el = nodes.size - 1
+                break
+        t_chain, t_fe = [], []
+        for _ in range(5):
+            t_chain.append(best_time(lambda: chain_frequencies(chain, None, data), number=200))
+            t_fe.append(best_time(lambda: fe_eigenvalues(beam, nodes, n), number=5))
+        tc, tf = float(np.median(t_chain)), float(np.median(t_fe))
+        uses = t_fit / max(tf - tc, 1e-12)
+        print(f"   {n}R: chain max error over {n} modes {100 * err_chain:.4f} %; coarsest FE "
+              f"mesh at that error: {n_el} elements; chain {tc * 1e6:.0f} us, FE {tf * 1e3:.2f}"
+              f" ms -> {tf / tc:.0f}x; fit {t_fit:.1f} CPU-s = {uses:.0f} FE evaluations "
+              "(break-even uses)")
+        out.append({"n": n, "err_chain": float(err_chain), "fe_elements": n_el,
+                    "t_chain_s": tc, "t_fe_s": tf, "ratio": tf / tc, "fit_cpu_s": t_fit,
+                    "break_even_uses": uses})
+    RESULTS["equal"] = out
+
+
 def main() -> None:
     """Run the selected sections."""
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sections", nargs="+",
-                        default=["truth", "condition", "speed", "table", "chart"])
+                        default=["truth", "condition", "speed", "table", "chart", "fitspeed",
+                                 "paper", "classic", "pareto", "scf", "equal"])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--starts", type=int, default=8)
     parser.add_argument("--out", default="prbdm_speed_accuracy.png")
+    parser.add_argument("--outdir", default=".")
+    parser.add_argument("--quick", action="store_true", help="small versions of the sections")
+    parser.add_argument("--json", default=None, metavar="FILE",
+                        help="write the new sections' numbers to FILE as JSON")
     args = parser.parse_args()
+    if args.quick:
+        args.starts = min(args.starts, 3)
     for name in args.sections:
         if name == "truth":
             section_truth()
@@ -210,6 +506,21 @@ def main() -> None:
             section_speed(args.seed, args.starts)
         elif name == "condition":
             section_condition()
+        elif name == "fitspeed":
+            section_fitspeed(args.quick)
+        elif name == "paper":
+            section_paper(args.seed, args.starts, args.quick)
+        elif name == "classic":
+            section_classic(args.seed, args.starts, args.quick)
+        elif name == "pareto":
+            section_pareto(args.seed, args.starts, args.quick, args.outdir)
+        elif name == "scf":
+            section_scf(args.seed, args.starts, args.quick, args.outdir)
+        elif name == "equal":
+            section_equal(args.seed, args.starts, args.quick)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(RESULTS, fh, indent=1, default=float)
 
 
 if __name__ == "__main__":

@@ -34,7 +34,7 @@ def test_config_hash_covers_settings_but_not_study_size():
     assert config_hash(PrbdmStudy(seed=1, n_beams=500, **TINY).configs()[0]) == h
     assert config_hash(PrbdmStudy(seed=9, n_beams=10, **TINY).configs()[0]) == h
     for change in ({"n_starts": 3}, {"n_sections": 4}, {"alphas": (2.0,)},
-                   {"truth_modes": 3}, {"objective": "combined"}):
+                   {"truth_modes": 3}, {"objective": "eigen"}):
         other = PrbdmStudy(seed=1, n_beams=10, **dict(TINY, **change))
         assert config_hash(other.configs()[0]) != h, change
 
@@ -64,7 +64,7 @@ def test_task_row_matches_an_independent_rebuild():
     from pinflex.prbdm.chain import build_chain, chain_frequencies
     from pinflex.prbdm.truth import beam_frequencies
 
-    study = PrbdmStudy(seed=11, n_beams=1, **TINY)
+    study = PrbdmStudy(seed=11, n_beams=1, **dict(TINY, objective="eigen"))
     (row,) = _run(study, 0)
     assert row["status"] == "ok" and row["error"] is None
     assert row["params"]["beam_seed"] == beam_seed(11, 0)
@@ -85,7 +85,7 @@ def test_task_row_matches_an_independent_rebuild():
 
 def test_a_failing_fit_is_a_row_not_an_exception():
     """A configuration the fit rejects yields a failed row with the error; others succeed."""
-    study = PrbdmStudy(seed=11, n_beams=1, **TINY)
+    study = PrbdmStudy(seed=11, n_beams=1, **dict(TINY, objective="eigen"))
     good = study.configs()[0]
     bad = {**good, "fit": {**good["fit"], "n_joints": 3, "n_modes": 3}}  # truth has 2 modes
     rows = _run(study, 0, [("bad", bad), ("good", good)])

@@ -77,7 +77,7 @@ class PrbdmStudy:
     n_beams: int
     links: tuple[int, ...] = (3,)
     modes: tuple[int, ...] | None = None
-    objective: str = "eigen"
+    objective: str = "combined"
     n_starts: int = 16
     stiffness_law: str = "segment"
     poses: str = "straight"
@@ -235,7 +235,9 @@ def run_prbdm_beam(study: dict, seed: int, item: int,
                 row["metrics"] = {"eigen_error": fit.eigen_error,
                                   "deflection_error": fit.deflection_error,
                                   "deflection_error_position": fit.deflection_error_position,
-                                  "combined_error": fit.combined_error}
+                                  "combined_error": fit.combined_error,
+                                  "eq15a_sum": fit.eq15a_sum,
+                                  "exactly_determined": float(fit.exactly_determined)}
                 row["status"], row["error"] = "ok", None
             except Exception as exc:  # noqa: BLE001 - recorded in the row
                 row["error"] = _error_text("fit", exc)

@@ -76,6 +76,15 @@ class PrbdmFit:
         n_starts: Multistart points per search.
         n_poses: Number of comparison poses m.
         pareto: Front points (eigen_error, deflection_error), sorted by deflection error.
+        n_free_parameters: Free design parameters (fractions less the simplex, factors).
+        n_matched: Matched quantities (frequencies over poses, plus two tip coordinates per
+            load when the objective uses deflection).
+        determinacy: ``"exactly determined"`` (n_free >= n_matched: the residual is zero up to
+            round-off on a manifold and says nothing of quality) or ``"over-determined"``.
+        metrics: What was minimised, ``"pinflex"`` or ``"paper"`` (see
+            :class:`~pinflex.prbdm.problem.MappingProblem`).
+        eq15a_sum: Eq. (15a) with eq. (16) summed over this fit's own poses [-].
+        eq15a_mean: The same divided by the number of poses [-].
     """
 
     beam: str
@@ -102,6 +111,21 @@ class PrbdmFit:
     n_starts: int
     n_poses: int
     pareto: tuple[tuple[float, float], ...] = field(default=())
+    n_free_parameters: int = 0
+    n_matched: int = 0
+    determinacy: str = ""
+    metrics: str = "pinflex"
+    eq15a_sum: float = float("nan")
+    eq15a_mean: float = float("nan")
+
+    @property
+    def exactly_determined(self) -> bool:
+        """True when the free parameters are at least as many as the matched quantities.
+
+        Such a fit can match its targets to round-off along a whole manifold of designs; its
+        residual is not a measure of model quality and is not reported as a loss.
+        """
+        return self.determinacy == "exactly determined"
 
     def to_dict(self) -> dict:
         """Plain-Python dictionary (JSON-ready); ``link_lengths`` aliases the lengths [m]."""
@@ -284,7 +308,10 @@ def final_evaluation(problem: MappingProblem, x: np.ndarray, jacobian: str = "an
     return evaluate(problem, x, deflection=deflection)
 
 
-def _score(ev: Evaluation, kind: str) -> float:
+def _score(ev: Evaluation, kind: str, metrics: str = "pinflex") -> float:
+    if metrics == "paper":
+        return {"eigen": ev.eigen_error_eq16, "deflection": ev.deflection_error_position}.get(
+            kind, float(np.hypot(ev.eigen_error_eq16, ev.deflection_error_position)))
     if kind == "eigen":
         return ev.eigen_error
     if kind == "deflection":
@@ -321,15 +348,15 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
             x = _local(problem, kind, x0, jacobian=jacobian)
             ev = final_evaluation(problem, x, jacobian)
         except (InvalidChain, np.linalg.LinAlgError, ValueError):
-            bar.update(min((_score(e, kind) for _, e in found), default=np.inf))
+            bar.update(min((_score(e, kind, problem.metrics) for _, e in found), default=np.inf))
             continue
-        if np.isfinite(_score(ev, kind)):
+        if np.isfinite(_score(ev, kind, problem.metrics)):
             found.append((x, ev))
-        bar.update(min((_score(e, kind) for _, e in found), default=np.inf))
+        bar.update(min((_score(e, kind, problem.metrics) for _, e in found), default=np.inf))
     if not found:
         raise MappingFailed(f"all {len(points)} starts of the {kind} mapping failed for "
                             f"{problem.n_joints}R; try more starts or another seed")
-    found.sort(key=lambda p: _score(p[1], kind))
+    found.sort(key=lambda p: _score(p[1], kind, problem.metrics))
     return found if keep_all else found[0]
 
 
@@ -376,18 +403,21 @@ def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.
 
 
 def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
-              objective: str = "eigen", stiffness_law: str = "segment",
+              objective: str = "combined", stiffness_law: str = "segment",
               poses: str | np.ndarray = "straight", n_starts: int = 16, seed: int = 0,
               truth: TruthData | None = None, pareto_points: int = 7,
-              progress: bool = False, jacobian: str = "analytic") -> PrbdmFit:
+              progress: bool = False, jacobian: str = "analytic",
+              metrics: str = "pinflex") -> PrbdmFit:
     """Fit an nR PRBDM to a beam.
 
     Args:
         planform: The beam.
         n_joints: Number of revolute joints n.
         n_modes: Modes to match; default n.
-        objective: ``"eigen"``, ``"deflection"``, ``"combined"`` or ``"pareto"``; the last two
-            start the combined search from the eigen-only solutions.
+        objective: ``"combined"`` (default: frequencies and large tip deflections, an
+            over-determined fit), ``"eigen"``, ``"deflection"`` or ``"pareto"``; combined and
+            pareto start from the eigen-only solutions. An eigen-only fit of n modes at one
+            pose has 2n free parameters: it is exactly determined and says so.
         stiffness_law: ``"segment"`` (pose-independent physical springs with per-joint factors)
             or ``"paper"`` (eq. 14, per-pose factors).
         poses: Comparison poses for frequencies, see :func:`~pinflex.prbdm.problem.build_problem`.
@@ -397,7 +427,8 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         pareto_points: Interior weights of the Pareto sweep.
         progress: Show a progress bar on stderr.
         jacobian: ``"analytic"`` (exact derivatives on one chain updated in place, default) or
-            ``"finite-difference"`` (the reference path, about ten times slower).
+            ``"finite-difference"`` (the reference path, several times slower).
+        metrics: ``"pinflex"`` (default) or ``"paper"`` (minimise eq. 16 / eq. 19 residuals).
 
     Returns:
         The fit; for ``"pareto"`` the front is in ``fit.pareto`` and the returned model is the
@@ -410,7 +441,7 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
     """
     if objective not in OBJECTIVES:
         raise InvalidChain(f"objective = {objective!r}; expected one of {OBJECTIVES}")
-    problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth)
+    problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth, metrics)
     front: list[tuple[np.ndarray, Evaluation]] = []
     if objective in ("pareto", "combined"):
         eigen_all = multistart(problem, "eigen", n_starts, seed, progress, keep_all=True,
@@ -432,6 +463,15 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
     return _make_fit(problem, x, ev, objective, n_starts, front)
 
 
+def determinacy_counts(problem: MappingProblem, objective: str) -> tuple[int, int]:
+    """(free parameters, matched quantities) of a mapping with the given objective."""
+    n_free = problem.n_params - 1
+    n_freq = int(problem.poses.shape[0]) * problem.n_modes
+    n_tip = 2 * int(problem.forces_n.shape[0])
+    matched = {"eigen": n_freq, "deflection": n_tip}.get(objective, n_freq + n_tip)
+    return n_free, matched
+
+
 def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective: str,
               n_starts: int, front: list) -> PrbdmFit:
     gamma, factors = decode(problem, x)
@@ -440,6 +480,8 @@ def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective:
 
     def tup(a) -> tuple:
         return tuple(float(v) for v in np.asarray(a).ravel())
+
+    n_free, n_matched = determinacy_counts(problem, objective)
 
     return PrbdmFit(
         beam=problem.planform.name, n_joints=problem.n_joints, n_modes=problem.n_modes,
@@ -456,4 +498,7 @@ def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective:
         model_tips_m=tuple(tup(t) for t in ev.model_tips_m), n_starts=n_starts,
         n_poses=int(problem.poses.shape[0]),
         pareto=tuple((float(p[1].eigen_error), float(p[1].deflection_error)) for p in front),
+        n_free_parameters=n_free, n_matched=n_matched,
+        determinacy="exactly determined" if n_free >= n_matched else "over-determined",
+        metrics=problem.metrics, eq15a_sum=ev.eq15a_sum, eq15a_mean=ev.eq15a_mean,
     )

@@ -30,7 +30,7 @@ Loads are dead tip forces perpendicular to the undeformed beam with
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pinocchio as pin
@@ -71,6 +71,10 @@ class MappingProblem:
         truth_tips_m: Elastica tip positions (x, z), shape (l, 2) [m].
         stiffness_law: ``"segment"`` or ``"paper"``.
         alphas: Load levels :math:`\alpha = PL^2/EI_{eq}`, shape (l,).
+        metrics: ``"pinflex"`` (the residuals are the per-mode relative frequency errors and
+            the displacement-normalised tip errors) or ``"paper"`` (eq. 16's
+            :math:`(f_{model} - f_{truth})/\|f_{truth}\|` per pose and eq. 19's tip error over
+            :math:`\|P_{truth}\|`). Only what is minimised changes; every loss is reported.
 
     The problem holds no state: warm starts of the tip statics are an explicit argument of
     :func:`evaluate` (a :class:`~pinflex.prbdm.sensitivity.WarmStarts`).
@@ -85,6 +89,7 @@ class MappingProblem:
     truth_tips_m: np.ndarray
     stiffness_law: str
     alphas: np.ndarray
+    metrics: str = "pinflex"
 
     @property
     def n_stiffness_params(self) -> int:
@@ -133,7 +138,7 @@ def compute_truth(planform: Planform, n_modes: int = 5,
 
 def build_problem(planform: Planform, n_joints: int, n_modes: int | None = None,
                   poses: str | np.ndarray = "straight", stiffness_law: str = "segment",
-                  truth: TruthData | None = None) -> MappingProblem:
+                  truth: TruthData | None = None, metrics: str = "pinflex") -> MappingProblem:
     """Assemble a mapping problem.
 
     Args:
@@ -144,12 +149,16 @@ def build_problem(planform: Planform, n_joints: int, n_modes: int | None = None,
             ``"paper"`` (the sweep of :func:`paper_poses`), or an array of shape (m, n) [rad].
         stiffness_law: ``"segment"`` or ``"paper"`` (see the module docstring).
         truth: Precomputed truth; computed with :func:`compute_truth` if omitted.
+        metrics: What the residuals measure, ``"pinflex"`` or ``"paper"`` (see
+            :class:`MappingProblem`).
 
     Raises:
         InvalidChain: For an unknown law or pose set, or too many modes.
     """
     if int(n_joints) != n_joints or n_joints < 1:
         raise InvalidChain(f"n_joints = {n_joints!r} must be a positive integer")
+    if metrics not in METRICS:
+        raise InvalidChain(f"metrics = {metrics!r}; expected one of {METRICS}")
     if stiffness_law not in STIFFNESS_LAWS:
         raise InvalidChain(f"stiffness_law = {stiffness_law!r}; expected one of {STIFFNESS_LAWS}")
     n_modes = n_joints if n_modes is None else int(n_modes)
@@ -171,7 +180,8 @@ def build_problem(planform: Planform, n_joints: int, n_modes: int | None = None,
         if pose_array.shape[1] != n_joints:
             raise InvalidChain(f"poses have {pose_array.shape[1]} columns, need {n_joints}")
     return MappingProblem(planform, int(n_joints), n_modes, truth.modes.freq_hz[:n_modes].copy(),
-                          pose_array, truth.forces_n, truth.tips_m, stiffness_law, truth.alphas)
+                          pose_array, truth.forces_n, truth.tips_m, stiffness_law, truth.alphas,
+                          metrics)
 
 
 def joint_pieces(planform: Planform, gamma: np.ndarray) -> np.ndarray:
@@ -213,6 +223,8 @@ class Evaluation:
             :math:`e_{eig}^2 + e_{defl}^2` (eigen part first, shape (m n_modes + 2 l,)).
         eigen_error_eq16: RMS over poses of eq. (16),
             :math:`\|f_{truth} - f_{model}\|_2 / \|f_{truth}\|_2` [-].
+        eq16_per_pose: Eq. (16) at each pose, shape (m,) [-]; eq. (15a) is their sum.
+        eq19_per_load: Eq. (19), tip error over the tip position vector, per load (l,) [-].
     """
 
     eigen_error: float
@@ -226,6 +238,18 @@ class Evaluation:
     failed_loads: int
     residuals: np.ndarray
     eigen_error_eq16: float
+    eq16_per_pose: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    eq19_per_load: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def eq15a_sum(self) -> float:
+        """Eq. (15a) with eq. (16): the sum over poses (not a mean) [-]."""
+        return float(np.sum(self.eq16_per_pose))
+
+    @property
+    def eq15a_mean(self) -> float:
+        """Eq. (16) averaged over poses (eq. 15a divided by the number of poses) [-]."""
+        return float(np.mean(self.eq16_per_pose))
 
 
 def decode(problem: MappingProblem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -290,7 +314,7 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
     pose_err = np.sqrt(np.mean(rel**2, axis=1))
     eig = float(np.sqrt(np.mean(rel**2)))
     eq16 = np.linalg.norm(model_hz - problem.truth_hz, axis=1) / np.linalg.norm(problem.truth_hz)
-    eig_res = rel.ravel() / np.sqrt(rel.size)
+    eig_res = _eigen_residuals(problem, model_hz)
     n_loads = problem.forces_n.shape[0]
     tips = np.full((n_loads, 2), np.nan)
     load_err = np.full(n_loads, np.nan)
@@ -305,7 +329,8 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
             truth = problem.truth_tips_m[ell]
             miss = np.linalg.norm(tips[ell] - truth) if ok else np.nan
             load_err[ell] = miss / np.linalg.norm(truth - undeformed) if ok else FAILED_LOAD_ERROR
-            defl_res[ell] = ((tips[ell] - truth) / np.linalg.norm(truth - undeformed) if ok
+            norm = np.linalg.norm(truth if problem.metrics == "paper" else truth - undeformed)
+            defl_res[ell] = ((tips[ell] - truth) / norm if ok
                              else np.full(2, FAILED_LOAD_ERROR / np.sqrt(2.0)))
             pos_err[ell] = miss / np.linalg.norm(truth) if ok else FAILED_LOAD_ERROR
     defl = float(np.sqrt(np.mean(load_err**2))) if deflection and n_loads else float("nan")
@@ -313,7 +338,19 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
     combined = float(np.hypot(eig, defl)) if deflection and n_loads else float("nan")
     residuals = np.concatenate([eig_res, defl_res.ravel() / np.sqrt(max(n_loads, 1))])
     return Evaluation(eig, defl, defl_pos, combined, pose_err, load_err, model_hz, tips, failed,
-                      residuals, float(np.sqrt(np.mean(eq16**2))))
+                      residuals, float(np.sqrt(np.mean(eq16**2))), eq16, pos_err)
+
+
+METRICS = ("pinflex", "paper")
+
+
+def _eigen_residuals(problem: MappingProblem, model_hz: np.ndarray) -> np.ndarray:
+    """Frequency residuals whose squared norm is the mean square of the problem's metric."""
+    if problem.metrics == "paper":
+        return ((model_hz - problem.truth_hz) / np.linalg.norm(problem.truth_hz)).ravel() \
+            / np.sqrt(model_hz.shape[0])
+    rel = model_hz / problem.truth_hz - 1.0
+    return rel.ravel() / np.sqrt(rel.size)
 
 
 def _solve_load(chain: PrbdmChain, data: pin.Data, index: int, force: np.ndarray,
