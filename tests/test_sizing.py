@@ -24,6 +24,7 @@ RODS = two_link(
 
 @pytest.fixture(scope="module")
 def rods():
+    """Benchmark A with solid-rod diameters as design variables, 10 trajectory samples."""
     model = FlexibleModel(parse(RODS), planar=True)
     full = user_trajectory(model, "benchmark_a")
     idx = np.linspace(0, len(full.times_s) - 1, 10).round().astype(int)
@@ -42,8 +43,9 @@ def test_design_mass_counts_link_beams_and_masses(rods):
 
 
 def test_least_mass_under_a_floor_matches_exact_optimisation(rods):
-    """Mode 1 kept 15 % above today's lowest value with the least rod mass: the sequential
-    Taylor sizing reaches the optimum of SLSQP on the exact model, floors exactly kept.
+    """Least rod mass with mode 1 15 % above today: the optimum of SLSQP on the exact model.
+
+    Floors hold on the exact model at every sample.
     """
     model, traj = rods
     f_today = model.frequencies(traj.q, n_modes=1)[:, 0]
