@@ -108,8 +108,8 @@ def section_limits(inputs: PropertyInputs, get) -> dict:
         inner = outer - 2.0 * val(inputs.section["wall"])
     else:
         inner = val(inputs.section.get("inner_diameter", 0.0))
-    # inner >= 0 is checked as inner + tiny > 0 (a solid rod is a valid limit)
-    return {"outer - inner diameter": outer - inner, "inner diameter": inner + 1e-300}
+    # a solid rod (inner = 0) is a valid limit; round-off below it is tolerated
+    return {"outer - inner diameter": outer - inner, "inner diameter": inner + 1e-9 * outer}
 
 
 def _value(x):

@@ -101,11 +101,35 @@ def _solve_step(model, y, didx, predict, floor, lo_b, hi_b, rho, span, budget):
     if budget is not None:
         cons.append({"type": "ineq", "fun": lambda x: (budget - design_mass(model, full(x)))
                      / m_ref})
+    limits = _section_limit_functions(model, full)
+    if limits is not None:
+        cons.append({"type": "ineq", "fun": limits})
     res = minimize(lambda x: design_mass(model, full(x)) / m_ref, np.zeros(n),
                    bounds=list(zip(lower, upper)), constraints=cons, method="SLSQP",
                    options={"ftol": 1e-13, "maxiter": 200})
     x = np.clip(res.x, lower, upper)
     return x * span
+
+
+def _section_limit_functions(model, full):
+    """Constraint values (≥ 0) that keep every designed section valid, or None."""
+    from pinflex.sections import section_limits
+
+    names = list(model.design_names)
+    links = [model._flex[link].spec.inputs for link in model._design_links]
+    if not any(inp.shape == "hollow_circle" for inp in links):
+        return None
+
+    def fun(x):
+        yv = full(x)
+        out = []
+        for inp in links:
+            lim = section_limits(inp, lambda n: yv[names.index(n)])
+            scale = max(abs(v) for v in lim.values()) or 1.0
+            out.extend(float(v) / scale for v in lim.values())
+        return np.array(out) if out else np.zeros(1)
+
+    return fun
 
 
 def _exact(model, Q, y, modes):
@@ -123,7 +147,7 @@ def size_for_floors(
     q0=None,
     order: int = 4,
     step_fraction: float = 0.5,
-    max_expansions: int = 12,
+    max_expansions: int = 30,
     xtol: float = 1e-6,
     tol_hz: float = 1e-6,
     mass_budget_kg: float | None = None,
@@ -217,7 +241,7 @@ def size_for_floors(
         if accept:
             history.append((y_new.copy(), mass_new, margin))
             y, f_now, tm = y_new, f_new, None  # re-expand at the new design
-            rho = np.minimum(rho * 2.0, 0.25 * span)
+            rho = np.minimum(rho * 2.0, span)
         else:
             rho = rho * 0.5
         if (accept and moved < xtol) or np.all(rho < xtol * span):

@@ -334,9 +334,9 @@ def _parse_flexible(el, links, joints, child_joints, parent_joint, R: Resolver) 
         od = num(section_inputs["outer_diameter"])
         if "wall" in section_inputs:
             w = num(section_inputs["wall"])
-            if not 2.0 * w < od:
+            if not 2.0 * w <= od:
                 raise InvalidBeamProperty(
-                    f"{what} section: wall = {w} must be below half the outer diameter {od} [m]"
+                    f"{what} section: wall = {w} must be at most half the outer diameter {od} [m]"
                 )
         else:
             inner = num(section_inputs.get("inner_diameter", 0.0))

@@ -112,20 +112,39 @@ def check_sections(model, get) -> None:
                 )
 
 
-def components(model, terms, alg) -> list[np.ndarray]:
-    """Unit matrices ``M_c(q)`` / ``K_c(q)`` over the modal coordinates, one per channel."""
+def _mm(alg, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``alg.mm`` that multiplies a constant jet by a plain matrix product (exact, cheaper)."""
+    from pinflex.erls.terms import BatchAlgebra
+
+    if isinstance(alg, BatchAlgebra) or a.shape[0] == 1:
+        return alg.mm(a, b)
+    if not np.any(a[1:]):
+        return a[0] @ b
+    if not np.any(b[1:]):
+        return a @ b[0]
+    return alg.mm(a, b)
+
+
+def components(model, terms, alg, which=None) -> list[np.ndarray | None]:
+    """Unit matrices ``M_c(q)`` / ``K_c(q)`` over the modal coordinates, one per channel.
+
+    ``which`` (booleans per channel) skips channels whose coefficient is zero (None there).
+    """
     if not model._design_channels:
         return []
     twist = model._root_twists(terms, alg)
     out: list[np.ndarray] = []
     full = []
     cache = {}
-    for ch in model._design_channels:
+    for n, ch in enumerate(model._design_channels):
+        if which is not None and not which[n]:
+            full.append(None)
+            continue
         if ch.name == "stiffness":
             j = next(jj for jj, _ in model._spring_joints if jj.name == ch.owner)
             gx = joint_conditions.parent_rows(model, terms, alg, twist, [j])
             g = np.concatenate([-gx, alg.const(model.coord_map[j.user_col][None, :])], axis=-1)
-            full.append(alg.mm(np.swapaxes(g, -1, -2), g))
+            full.append(_mm(alg, np.swapaxes(g, -1, -2), g))
             continue
         if ch.owner not in cache:
             a = model._assembly_arrays[ch.owner]
@@ -136,16 +155,16 @@ def components(model, terms, alg) -> list[np.ndarray]:
         bx, w = cache[ch.owner]
         nx = model.nx
         if ch.kind == "M":
-            full.append(alg.mm(np.swapaxes(w, -1, -2), ch.unit @ w))
+            full.append(_mm(alg, np.swapaxes(w, -1, -2), ch.unit @ w))
         else:
-            k = alg.mm(np.swapaxes(bx, -1, -2), ch.unit @ bx)
+            k = _mm(alg, np.swapaxes(bx, -1, -2), ch.unit @ bx)
             big = np.zeros(k.shape[:-2] + (nx + model.nv, nx + model.nv))
             big[..., :nx, :nx] = k
             full.append(big)
     T = joint_conditions.transform(model, terms, alg, twist)
     for m in full:
-        if T is not None:
-            m = alg.mm(np.swapaxes(T, -1, -2), alg.mm(m, T))
+        if T is not None and m is not None:
+            m = _mm(alg, np.swapaxes(T, -1, -2), _mm(alg, m, T))
         out.append(m)
     return out
 
@@ -165,10 +184,15 @@ def add_to(model, terms, y: np.ndarray, M: np.ndarray, K: np.ndarray, n_poses: i
     check_sections(model, at(y))
     f = channel_values(model, at(y))
     f0 = channel_values(model, at(nominal))
-    comps = components(model, terms, BatchAlgebra(n_poses))
+    which = [bool(np.any(np.asarray(fc) != fc0)) for fc, fc0 in zip(f, f0)]
+    if not any(which):  # the nominal design: nothing to add
+        return M, K
+    comps = components(model, terms, BatchAlgebra(n_poses), which)
     dtype = complex if np.iscomplexobj(y) else float  # complex steps pass through
     M, K = np.array(M, dtype=dtype), np.array(K, dtype=dtype)
     for ch, fc, fc0, C in zip(model._design_channels, f, f0, comps):
+        if C is None:
+            continue
         delta = np.asarray(fc - fc0)
         scaled = delta[..., None, None] * C
         if ch.kind == "M":

@@ -58,7 +58,6 @@ def add_jets(model, space: JetSpace, terms, alg, joint_idx, design_idx, y0, M, K
     nominal = model.y0
     f0 = erls_design.channel_values(model, lambda n: nominal[names.index(n)])
     erls_design.check_sections(model, lambda n: y0[names.index(n)])
-    comps = erls_design.components(model, terms, alg)
     if nd:
         dspace = JetSpace(nd, space.order)
         var_of = {names[j]: k for k, j in enumerate(design_idx)}
@@ -77,11 +76,16 @@ def add_jets(model, space: JetSpace, terms, alg, joint_idx, design_idx, y0, M, K
         ia = np.arange(space.ncoef)
         ib = np.zeros(space.ncoef, dtype=int)
         tg = np.arange(space.ncoef)
-    M, K = np.array(M, copy=True), np.array(K, copy=True)
-    for ch, fc, fc0, C in zip(model._design_channels, f, f0, comps):
-        fc = fc.copy()
+    f = [fc.copy() for fc in f]
+    for fc, fc0 in zip(f, f0):
         fc[0] -= fc0
-        if not np.any(fc):
+    which = [bool(np.any(fc)) for fc in f]
+    if not any(which):
+        return M, K
+    comps = erls_design.components(model, terms, alg, which)
+    M, K = np.array(M, copy=True), np.array(K, copy=True)
+    for ch, fc, C in zip(model._design_channels, f, comps):
+        if C is None:
             continue
         contrib = C[ia] * fc[ib][:, None, None]
         if ch.kind == "M":
