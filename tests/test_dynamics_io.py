@@ -122,3 +122,34 @@ def test_free_vibration_conserves_energy_to_the_tolerance(arm):
     assert energies[1e-4] <= 10 * 1e-4
     assert energies[1e-4] < energies[1e-3]
     assert math.isfinite(energies[1e-3])
+
+
+def test_playback_page_of_a_simulation(arm, tmp_path):
+    """The meshcat playback of a short simulation writes an offline page."""
+    pytest.importorskip("meshcat")
+    from pinflex.dynamics import simulate_prescribed
+    from pinflex.trajectory import Trajectory
+    from pinflex.visualization.playback import simulation_playback_html
+
+    dyn = ErlsDynamics(arm, y=[0.1, 0.05])
+    t = np.linspace(0, 0.05, 6)
+    s = t / 0.05
+    q = np.array([1.7, 5.1]) + (10 * s**3 - 15 * s**4 + 6 * s**5)[:, None] * 0.05
+    sim = simulate_prescribed(dyn, Trajectory(t, q), after_s=0.02, sample_hz=1000.0)
+    page = simulation_playback_html(dyn, sim, tmp_path / "play.html", exaggeration=100)
+    text = page.read_text()
+    assert "elastic motion drawn 100 x" in text
+    with pytest.raises(ConfigurationError):
+        simulation_playback_html(dyn, sim, tmp_path / "bad.html", exaggeration=0)
+
+
+def test_simulate_command_rejects_a_bad_table(tmp_path, capsys):
+    """`pinflex simulate` exits with status 2 and one line naming every problem."""
+    from pinflex.cli import main
+
+    study = tmp_path / "s.toml"
+    study.write_text('robot = "builtin:two_link.urdf"\nplanar = true\n[[targets]]\nmode = 1\n'
+                     'freq_hz = 190.0\n[simulation]\ndrive = "fly"\nfoo = 1\n')
+    assert main(["simulate", str(study), "--json"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "foo" in err[0] and "fly" in err[0]

@@ -28,6 +28,9 @@ def add_parser(sub) -> None:
     d.add_argument("--json", action="store_true", help="print one JSON object")
     d.add_argument("--html", default=None, metavar="FILE",
                    help="HTML preview file (default: OUT/preview.html)")
+    d.add_argument("--vibration", action="store_true",
+                   help="also simulate the tip vibration of the baseline and the assigned design "
+                   "along the motion (pinflex.dynamics)")
     d.add_argument("--no-brute-force", action="store_true",
                    help="skip the exact grid search that checks the QP's answer")
     add_model_arguments(d)
@@ -121,12 +124,19 @@ def cmd_demo(args: argparse.Namespace) -> int:
         say(f"  wrote {c}")
     if html:
         say(f"  wrote {html}")
+    vib = None
+    if args.vibration:
+        from pinflex.dynamics.demo import vibration_demo
+
+        vib = vibration_demo(model, traj, result, out_dir, say)
     total = time.perf_counter() - t_all
     say(f"  demo finished in {total:.1f} s; outputs in {out_dir}/")
     if args.json:
         out = summary(result, total)
         out.update({"taylor_errors_percent": errs, "paper": PAPER, "ndof": model.ndof,
                     "charts": [str(c) for c in charts], "html": html, "out": str(out_dir)})
+        if vib is not None:
+            out["vibration"] = vib
         if brute is not None:
             out["brute_force"] = {"y_best_cost": brute.y_best_cost.tolist(),
                                   "y_best_max_error": brute.y_best_max_error.tolist(),

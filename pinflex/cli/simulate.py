@@ -18,6 +18,9 @@ def add_parser(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="folder for the charts and the time series (JSON)")
+    p.add_argument("--exaggeration", type=float, default=200.0,
+                   help="with --out: factor on the elastic motion in the meshcat playback pages "
+                   "(0: no playback; default 200)")
     p.set_defaults(func=cmd_simulate)
 
 
@@ -25,7 +28,7 @@ def run_study(path) -> tuple[list, list, object, object]:
     """Assign the study's design, then simulate the baseline and the assigned design.
 
     Returns:
-        ``(reports, simulations, settings, assignment result)``.
+        ``(reports, [(simulation, dynamics)], settings, assignment result)``.
     """
     from pinflex.assignment.study import run_config
     from pinflex.dynamics.study import load_simulation_study, simulate_design
@@ -35,9 +38,9 @@ def run_study(path) -> tuple[list, list, object, object]:
     designs = [("baseline", result.y_before), ("assigned", result.y)]
     reports, sims = [], []
     for name, y in designs:
-        rep, sim = simulate_design(model, traj, y, settings, name)
+        rep, sim, dyn = simulate_design(model, traj, y, settings, name)
         reports.append(rep)
-        sims.append(sim)
+        sims.append((sim, dyn))
     return reports, sims, settings, result
 
 
@@ -57,6 +60,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             p = out / f"{rep.name}_series.json"
             p.write_text(rep.to_json(series=True))
             files.append(str(p))
+        if args.exaggeration > 0:
+            try:
+                from pinflex.visualization.playback import simulation_playback_html
+            except ImportError:
+                simulation_playback_html = None
+            if simulation_playback_html is not None:
+                for rep, (sim, dyn) in zip(reports, sims):
+                    files.append(str(simulation_playback_html(
+                        dyn, sim, out / f"{rep.name}_playback.html",
+                        exaggeration=args.exaggeration)))
     designs = []
     for rep in reports:
         d = rep.summary()

@@ -190,6 +190,33 @@ class PrescribedSystem:
         return Abar, bbar
 
 
+class _ReducedSystem:
+    """Galerkin projection of a :class:`PrescribedSystem` on ``k`` locked-joint modes."""
+
+    def __init__(self, full: PrescribedSystem, k: int):
+        import scipy.linalg
+
+        if not 1 <= k <= full.nx:
+            raise ConfigurationError(f"modes = {k} must lie in [1, {full.nx}]")
+        self.full = full
+        c = full.coefficients(full.motion.t1 + 1.0, damped=False)
+        _, phi = scipy.linalg.eigh(c.K, c.M, subset_by_index=[0, k - 1])
+        self.basis = phi  # (nx, k), mass-normalised at the final pose
+        self.nx = k
+        self.nv = full.nv
+        self.dyn = full.dyn
+        self.motion = full.motion
+
+    def coefficients(self, t: float, *, damped: bool = True) -> _Coefficients:
+        c = self.full.coefficients(t, damped=damped)
+        P = self.basis
+        return _Coefficients(P.T @ c.M @ P, P.T @ c.C @ P, P.T @ c.K @ P, P.T @ c.f,
+                             c.A @ P, c.full)
+
+    def state_matrix(self, c: _Coefficients):
+        return PrescribedSystem.state_matrix(self, c)
+
+
 @dataclass
 class Simulation:
     """The raw result of a time simulation.
@@ -248,6 +275,7 @@ def simulate_prescribed(
     exact: bool = False,
     start: str = "static",
     rho_inf: float = 0.9,
+    modes: int | None = None,
 ) -> Simulation:
     """Kineto-elastodynamics: the joints follow ``trajectory``, the elastic coordinates respond.
 
@@ -269,6 +297,9 @@ def simulate_prescribed(
             gravity) or ``"rest"`` from ``x = 0``.
         rho_inf: High-frequency spectral radius of the generalized-α scheme (``1`` conserves
             energy, no numerical damping; see :func:`newmark`).
+        modes: Reduced simulation on the ``modes`` lowest locked-joint modes of the final pose
+            (modal truncation, ``x = Φ_k η``, Galerkin projection of the projected system);
+            ``None`` keeps every elastic coordinate.
 
     The hold phase after the stop is a constant-coefficient system, propagated exactly by its
     modes at the output rate (:func:`_modal_hold`); its ``steps`` are the output samples.
@@ -281,7 +312,9 @@ def simulate_prescribed(
         raise SimulationError("the model has no flexible link: nothing vibrates")
     tic = time.perf_counter()
     system = PrescribedSystem(dyn, motion, damping)
-    nx = dyn.nx
+    if modes is not None:
+        system = _ReducedSystem(system, int(modes))
+    nx = system.nx
     c0 = system.coefficients(motion.t0)
     x0 = np.zeros(nx)
     if start == "static" and np.any(c0.f):
@@ -339,8 +372,10 @@ def simulate_prescribed(
     Y[~hold] = run1(times[~hold])
     Y[hold] = Yh
     x, xd = Y[:, :nx], Y[:, nx:]
+    if modes is not None:
+        x, xd = x @ system.basis.T, xd @ system.basis.T
     q_phys, qd_phys, _ = motion.sample(times)
-    A_end = cend.A
+    A_end = dyn.joint_offsets(motion.q_end)[0]
     q = q_phys + x @ A_end.T
     qd = qd_phys + xd @ A_end.T
     if dyn.offsets_vary:
@@ -357,6 +392,11 @@ def simulate_prescribed(
         [:, nx:] / (np.minimum(knots + delta, motion.t1) - np.maximum(knots - delta, motion.t0))
         [:, None],
         Ydh[-1:, nx:] if Yh.size else np.zeros((1, nx))])
+    if modes is not None:
+        P = system.basis
+        y_tau = np.hstack([y_tau[:, :nx] @ P.T, y_tau[:, nx:] @ P.T])
+        a_tau = a_tau @ P.T
+        system = system.full
     tau = np.array([system.torque(t, y, a) for t, y, a in zip(t_tau, y_tau, a_tau)])
     return Simulation(
         times_s=times, x=x, xd=xd, q=q, qd=qd, q_physical=q_phys, stop_s=motion.t1,

@@ -170,7 +170,7 @@ def load_simulation_study(path: str | Path):
 
 
 def simulate_design(model, trajectory, y, settings: SimulationSettings, name: str):
-    """Simulate one design of a study; returns ``(report, simulation)``."""
+    """Simulate one design of a study; returns ``(report, simulation, dynamics)``."""
     from pinflex.dynamics.response import vibration_report
     from pinflex.dynamics.simulate import simulate_prescribed, simulate_torque
     from pinflex.dynamics.terms import ErlsDynamics
@@ -192,4 +192,4 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
                               sample_hz=settings.sample_hz, rtol=settings.rtol,
                               atol=settings.atol, rho_inf=settings.rho_inf)
     rep = vibration_report(dyn, sim, name=name, frame=settings.frame, xyz=settings.point)
-    return rep, sim
+    return rep, sim, dyn
