@@ -153,3 +153,24 @@ def test_simulate_command_rejects_a_bad_table(tmp_path, capsys):
     assert main(["simulate", str(study), "--json"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "foo" in err[0] and "fly" in err[0]
+
+
+def test_reduced_basis_of_one_pose_is_detected(arm):
+    """Modes of the final pose alone miss the static response of a folding move: warned."""
+    from pinflex.dynamics.motion import JointMotion
+    from pinflex.dynamics.simulate import PrescribedSystem, _ReducedSystem
+    from pinflex.exceptions import PinflexWarning
+    from pinflex.trajectory import Trajectory
+
+    dyn = ErlsDynamics(arm, y=[0.0, 0.0])
+    t = np.linspace(0.0, 0.3, 31)
+    s = t / 0.3
+    h = 10 * s**3 - 15 * s**4 + 6 * s**5
+    q = np.array([1.8, 5.15]) + h[:, None] * np.array([0.3, 0.7])  # the elbow folds 0.4 rad
+    full = PrescribedSystem(dyn, JointMotion(Trajectory(t, q)))
+    with pytest.warns(PinflexWarning):
+        one = _ReducedSystem(full, 4, n_poses=1)
+    three = _ReducedSystem(full, 4, n_poses=3)
+    assert one.static_error > 0.5
+    assert three.static_error < 0.05
+    assert three.nx == 12
