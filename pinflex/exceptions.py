@@ -238,3 +238,69 @@ class ParameterNotFound(InvalidDescription):
             f"{at}'{{{name}}}' references no parameter; declared parameters: {names} "
             f"(add <pinflex:parameter name=\"{name}\" value=\"...\"/>)"
         )
+
+
+# --------------------------------------------------------------------- input validation
+class SchemaError(InvalidDescription):
+    """The pinflex annotations or the URDF around them break the schema.
+
+    One error reports every problem found in the file (``problems``, in file order); its
+    class is that of the first problem. Each problem names the file, the line, the element
+    and the attribute, and suggests the closest valid name where there is one.
+    """
+
+    def __init__(self, message: str, problems=()):
+        self.problems = list(problems)
+        super().__init__(message)
+
+
+class UnknownElement(SchemaError):
+    """An element (or namespace) that the pinflex schema does not know."""
+
+
+class UnknownAttribute(SchemaError):
+    """An attribute that the element does not have in the pinflex schema."""
+
+
+class InvalidAttribute(SchemaError, InvalidBeamProperty):
+    """An attribute is missing, not a number, not finite, out of range or inconsistent."""
+
+
+class ImplausibleValue(InvalidAttribute):
+    """A value is possible in principle but not for a physical robot link (e.g. E = 70 Pa)."""
+
+
+class UnreadableFile(InvalidDescription):
+    """An input file is missing, binary, not UTF-8 text or too large to be a description."""
+
+
+class NoFlexibleLink(InvalidDescription):
+    """A modal analysis was asked of a robot with no flexible link (no elastic modes)."""
+
+
+class StudyError(ConfigurationError):
+    """A TOML study breaks its schema; ``problems`` lists every problem in the file."""
+
+    def __init__(self, message: str, problems=()):
+        self.problems = list(problems)
+        super().__init__(message)
+
+
+class ResourceLimitExceeded(PinflexError):
+    """A computation would need more memory (or time) than pinflex allows; checked up front."""
+
+
+class OutputError(PinflexError):
+    """An output file or folder cannot be written (exists as the wrong kind, no permission)."""
+
+
+class ViewerServerError(PinflexError):
+    """The local meshcat server could not be started or reached."""
+
+
+class PlausibilityWarning(PinflexWarning):
+    """A value is allowed but unusual for a robot link (check its units)."""
+
+
+class CostWarning(PinflexWarning):
+    """A computation is allowed but estimated to be long or memory-hungry."""

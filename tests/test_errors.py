@@ -56,7 +56,7 @@ def test_zero_length_beam():
 
 def test_zero_elements():
     """A beam needs at least one element."""
-    with pytest.raises(InvalidBeamProperty, match="'elements' must be >= 1"):
+    with pytest.raises(InvalidBeamProperty, match="elements=0 must be >= 1"):
         parse(single_link_urdf(elements=0))
 
 

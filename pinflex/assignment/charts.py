@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from pinflex.outputs import output_dir, save_figure
+
 
 def _figure(width: float, height: float):
     from matplotlib.figure import Figure
@@ -46,7 +48,7 @@ def assignment_charts(result, times_s: np.ndarray, out_dir: str | Path, data=Non
         ``other_modes.png`` when modes other than the targets are reported.
     """
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, "chart folder")
     written = []
     n_targets = result.targets_hz.shape[0]
     target_modes = list(result.modes[:n_targets])
@@ -79,7 +81,7 @@ def assignment_charts(result, times_s: np.ndarray, out_dir: str | Path, data=Non
         ax.legend(fontsize=7)
         fig.tight_layout()
         path = out / f"mode{mode}_assignment.png"
-        fig.savefig(path)
+        save_figure(fig, path)
         written.append(path)
     others = sorted(m for m in modes if m not in target_modes)
     if others:
@@ -100,6 +102,6 @@ def assignment_charts(result, times_s: np.ndarray, out_dir: str | Path, data=Non
                      fontsize=10)
         fig.tight_layout()
         path = out / "other_modes.png"
-        fig.savefig(path)
+        save_figure(fig, path)
         written.append(path)
     return written

@@ -92,9 +92,11 @@ class AssignmentData:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write :meth:`rows` (empty cells for NaN: no target or no prediction)."""
+        from pinflex.outputs import atomic_path
+
         path = Path(path)
         rows = self.rows()
-        with open(path, "w", newline="") as fh:
+        with atomic_path(path, "assignment CSV") as tmp, open(tmp, "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=list(rows[0]))
             w.writeheader()
             for r in rows:
@@ -110,8 +112,11 @@ class AssignmentData:
         except ImportError as exc:
             raise MissingDependency("pyarrow", "Parquet output") from exc
         rows = self.rows()
+        from pinflex.outputs import atomic_path
+
         table = pa.table({k: [r[k] for r in rows] for k in rows[0]})
-        pq.write_table(table, str(path))
+        with atomic_path(path, "assignment Parquet") as tmp:
+            pq.write_table(table, str(tmp))
         return Path(path)
 
     def to_dict(self) -> dict:
@@ -142,9 +147,9 @@ class AssignmentData:
 
     def to_json(self, path: str | Path) -> Path:
         """Write :meth:`to_dict` as a JSON file."""
-        path = Path(path)
-        path.write_text(json.dumps(self.to_dict(), indent=1))
-        return path
+        from pinflex.outputs import write_text
+
+        return write_text(path, json.dumps(self.to_dict(), indent=1), "assignment JSON")
 
     def constraint_lines(self) -> list[str]:
         """Readable lines, one per constraint, active ones marked."""

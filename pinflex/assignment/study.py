@@ -22,7 +22,7 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped in ``
     [expansion]
     q0 = [1.817, 5.312]            # default: the middle sample
     y0 = { m1 = 0.125, m2 = 0.125 }
-    order = 4
+    order = 4                      # 0 to 12 (pinflex.resources.MAX_TAYLOR_ORDER)
     quantity = "freq_hz"           # or "eigval"
 
     [[targets]]
@@ -43,15 +43,18 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped in ``
 
 from __future__ import annotations
 
+import functools
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 from pinflex.assignment.driver import Target, assign_frequencies
+from pinflex.assignment.study_schema import check_against_model, check_study
 from pinflex.erls import FlexibleModel
-from pinflex.exceptions import ConfigurationError
+from pinflex.exceptions import ConfigurationError, StudyError
 from pinflex.trajectory import Trajectory, benchmark_a_trajectory
 
 URDF_DIR = Path(__file__).resolve().parents[2] / "urdf"
@@ -133,52 +136,98 @@ class AssignmentConfig:
 
 
 def load_config(path: str | Path) -> AssignmentConfig:
-    """Read an assignment study from a TOML file."""
+    """Read an assignment study from a TOML file, checked against its schema.
+
+    Every problem of the file (unknown keys, wrong types, values out of range, modes or design
+    names the robot does not have) is listed in one :class:`StudyError`; see
+    :mod:`pinflex.assignment.study_schema`.
+    """
+    from pinflex.description.source import read_text
+
     path = Path(path)
-    if not path.is_file():
-        raise ConfigurationError(f"config file '{path}' does not exist")
+    source = str(path)
+    text = read_text(path, "study file", StudyError)
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigurationError(f"'{path}' is not valid TOML: {exc}") from exc
-    folder = path.parent
-    if "robot" not in data:
-        raise ConfigurationError(f"'{path}': the key robot = \"...\" is missing")
-    targets = []
-    for t in data.get("targets", []):
-        if "mode" not in t or "freq_hz" not in t:
-            raise ConfigurationError("each [[targets]] entry needs mode and freq_hz")
-        targets.append(Target(int(t["mode"]), t["freq_hz"], float(t.get("weight", 1.0))))
-    if not targets:
-        raise ConfigurationError(f"'{path}': give at least one [[targets]] entry")
+        raise StudyError(f"{source}: not valid TOML: {exc}") from exc
+    return config_from_data(data, path.parent, source)
+
+
+def _model_facts(robot: Path, planar: bool, joints, values) -> SimpleNamespace:
+    """What the study checks need of the robot (cached while its file is unchanged)."""
+    try:
+        stat = robot.stat()
+        key = (stat.st_mtime_ns, stat.st_size)
+    except OSError:
+        key = (0, 0)
+    values_key = tuple(sorted(values.items())) if isinstance(values, dict) else values
+    return _model_facts_cached(str(robot), bool(planar), joints, values_key, key)
+
+
+@functools.lru_cache(maxsize=16)
+def _model_facts_cached(robot: str, planar: bool, joints, values, _key) -> SimpleNamespace:
+    model = FlexibleModel(robot, planar=planar, joints=joints,
+                          values=dict(values) if values is not None else None)
+    return SimpleNamespace(nx=model.n_elastic, nv=model.nv, ny=model.ny, ndof=model.ndof,
+                           design=model.design, design_names=model.design_names,
+                           joint_names=model.joint_names)
+
+
+def config_from_data(data: dict, folder: Path, source: str = "<study>") -> AssignmentConfig:
+    """An :class:`AssignmentConfig` from a study's TOML data, checked as :func:`load_config`."""
+    from pinflex.exceptions import PinflexError
+    from pinflex.resources import check_taylor
+    from pinflex.validation import Problem, raise_problems
+
+    problems = check_study(data)
+    bad_robot = any(p.where.split(".")[0] in ("robot", "planar", "joints", "values")
+                    for p in problems)
+    if not bad_robot:
+        try:
+            robot = resolve(data["robot"], folder)
+            model = _model_facts(robot, data.get("planar", False), data.get("joints", "free"),
+                                 data.get("values"))
+        except PinflexError as exc:
+            problems.append(Problem("robot", str(exc), StudyError))
+        else:
+            problems += check_against_model(data, model)
+            exp = data.get("expansion", {})
+            order = exp.get("order", 4) if isinstance(exp, dict) else 4
+            if not any(p.where.startswith("expansion") for p in problems):
+                try:
+                    check_taylor(model.nv + model.ny, int(order), model.ndof, model.ny)
+                except PinflexError as exc:
+                    problems.append(Problem("expansion.order", str(exc), StudyError))
+    traj = data.get("trajectory", {})
+    if isinstance(traj, dict) and isinstance(traj.get("csv"), str):
+        csv_path = resolve(traj["csv"], folder)
+        if not csv_path.is_file():
+            problems.append(Problem("trajectory.csv", f"file '{csv_path}' does not exist",
+                                    StudyError))
+    raise_problems(source, problems, " in the study")
     exp = data.get("expansion", {})
     cons = data.get("constraints", {})
     opts = data.get("options", {})
-    known = {"robot", "planar", "trajectory", "expansion", "targets", "constraints", "options",
-             "joints", "values", "simulation"}
-    unknown = set(data) - known
-    if unknown:
-        raise ConfigurationError(
-            f"'{path}': unknown keys {sorted(unknown)}; known: {sorted(known)}"
-        )
     return AssignmentConfig(
         robot=resolve(data["robot"], folder),
-        planar=bool(data.get("planar", False)),
+        planar=data.get("planar", False),
         trajectory=data.get("trajectory", {"builtin": "benchmark_a"}),
-        targets=targets,
+        targets=[Target(t["mode"], t["freq_hz"], float(t.get("weight", 1.0)))
+                 for t in data["targets"]],
         q0=np.array(exp["q0"], dtype=float) if "q0" in exp else None,
         y0=exp.get("y0"),
-        order=int(exp.get("order", 4)),
-        quantity=str(exp.get("quantity", "freq_hz")),
+        order=exp.get("order", 4),
+        quantity=exp.get("quantity", "freq_hz"),
         mass_budget_kg=cons.get("mass_budget_kg"),
-        floors=[(int(f["mode"]), float(f["freq_hz"])) for f in cons.get("floors", [])],
-        bands=[(int(b["mode"]), float(b["low_hz"]), float(b["high_hz"]))
+        floors=[(f["mode"], float(f["freq_hz"])) for f in cons.get("floors", [])],
+        bands=[(b["mode"], float(b["low_hz"]), float(b["high_hz"]))
                for b in cons.get("bands", [])],
         baseline=opts.get("baseline"),
-        refine=bool(opts.get("refine", False)),
-        report_modes=[int(m) for m in opts.get("report_modes", [2, 3, 4])],
+        refine=opts.get("refine", False),
+        report_modes=list(opts.get("report_modes", [2, 3, 4])),
         folder=folder,
-        joints=str(data.get("joints", "free")),
+        joints=data.get("joints", "free"),
         values=dict(data["values"]) if "values" in data else None,
     )
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from pinflex.batch.store import ResultStore, Row
 from pinflex.exceptions import StoreError
+from pinflex.outputs import output_dir, save_figure
 
 PERCENTILES = (0, 5, 25, 50, 75, 95, 100)
 
@@ -175,7 +176,7 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
 
     path = Path(path)
     out = Path(out_dir) if out_dir is not None else path.with_name(path.stem + "-report")
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, "report folder")
     with ResultStore(path) as store:
         configs = store.configs()
         grouped: dict[str, tuple[str, list[Row]]] = {}
@@ -200,7 +201,7 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
             fig.tight_layout()
             safe = re.sub(r"[^A-Za-z0-9._-]+", "-", name.split(" [")[0]).strip("-")
             file = out / f"{index:02d}_{safe}_{metric}.png"
-            fig.savefig(file, dpi=110)
+            save_figure(fig, file, dpi=110)
             plt.close(fig)
             written.append(file)
     return written
@@ -224,9 +225,10 @@ class CaseTable:
         """Write the table as CSV (empty cells for missing values)."""
         import csv
 
+        from pinflex.outputs import atomic_path
+
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "w", newline="") as fh:
+        with atomic_path(path, "sweep table CSV") as tmp, open(tmp, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(self.columns)
             for r in self.rows:

@@ -194,7 +194,7 @@ def connect(scheduler: str | None = None, workers: int | None = None):
                              "many `dask worker` processes as you want instead")
         try:
             return Client(scheduler, timeout="20s"), None
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
             raise BatchError(f"no Dask scheduler answers at {scheduler} ({exc}); start one "
                              "with `dask scheduler` and pass the address it prints") from exc
     n = int(workers) if workers is not None else (os.cpu_count() or 1)

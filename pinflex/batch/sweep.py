@@ -139,9 +139,14 @@ def apply_overrides(cfg, overrides: dict):
         InvalidSweep: For an index out of range or a value of the wrong type.
     """
     from pinflex.assignment.study import resolve
+    from pinflex.assignment.study_schema import check_override
 
     cfg = copy.deepcopy(cfg)
     for key, value in overrides.items():
+        problems = check_override(key, value)
+        if problems:
+            raise InvalidSweep(f"--sweep {key}={value!r}: "
+                               + "; ".join(p.message for p in problems))
         parts = key.split(".")
         try:
             if key == "robot":

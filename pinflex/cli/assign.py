@@ -68,7 +68,12 @@ def cmd_assign(args: argparse.Namespace) -> int:
     from pinflex.assignment.charts import assignment_charts
     from pinflex.assignment.report import assignment_data
     from pinflex.assignment.study import load_config, run_config
+    from pinflex.outputs import check_dir_target, check_file_target
 
+    if args.out:
+        check_dir_target(args.out, "--out")
+    if args.html:
+        check_file_target(args.html, "--html")
     t0 = time.perf_counter()
     cfg = load_config(args.config)
     if args.joints is not None:

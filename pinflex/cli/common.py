@@ -6,6 +6,7 @@ import argparse
 from collections.abc import Sequence
 
 from pinflex.exceptions import ConfigurationError
+from pinflex.validation import parse_number
 
 
 def parse_values(items: Sequence[str] | None) -> dict[str, float]:
@@ -16,9 +17,9 @@ def parse_values(items: Sequence[str] | None) -> dict[str, float]:
         if not sep:
             raise ConfigurationError(f"--set expects NAME=VALUE, got '{item}'")
         try:
-            out[name.strip()] = float(value)
+            out[name.strip()] = parse_number(value)
         except ValueError as exc:
-            raise ConfigurationError(f"--set {item}: '{value}' is not a number") from exc
+            raise ConfigurationError(f"--set {item}: {exc}") from exc
     return out
 
 

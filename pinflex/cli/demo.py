@@ -13,6 +13,7 @@ import numpy as np
 
 from pinflex.cli.assign import summary, write_preview
 from pinflex.cli.common import add_model_arguments, joints_text, parse_values
+from pinflex.outputs import output_dir
 
 PAPER = {
     "taylor_traj_full": 0.09, "taylor_traj_lin": 1.64,
@@ -46,7 +47,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from pinflex.parametric import expand
 
     out_dir = Path(args.out)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = output_dir(out_dir)
     log = sys.stderr if args.json else sys.stdout
 
     def say(msg=""):

@@ -59,6 +59,18 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Execute ``pinflex prbdm``; return the process exit status."""
+    from pinflex.exceptions import ConfigurationError
+    from pinflex.outputs import check_file_target
+    from pinflex.validation import require_count
+
+    require_count(args.seed, "--seed", minimum=0, error=ConfigurationError)
+    require_count(args.starts, "--starts", minimum=1, error=ConfigurationError)
+    require_count(args.links, "--links", minimum=1, error=ConfigurationError)
+    if args.modes is not None:
+        require_count(args.modes, "--modes", minimum=1, error=ConfigurationError)
+    require_count(args.sections, "--sections", minimum=0, error=ConfigurationError)
+    if args.html:
+        check_file_target(args.html, "--html")
     beam = (uniform_beam() if args.beam == "uniform"
             else random_beam(args.seed, n_sections=args.sections))
     n_modes = args.modes if args.modes is not None else args.links

@@ -42,9 +42,16 @@ def add_parser(sub) -> None:
 def cmd_view(args: argparse.Namespace) -> int:
     """Run ``pinflex view``."""
     from pinflex.erls import FlexibleModel
+    from pinflex.exceptions import ConfigurationError
+    from pinflex.outputs import check_file_target
     from pinflex.visualization import served_visualizer, trajectory_preview
     from pinflex.visualization.modes_page import modes_preview
 
+    if args.html:
+        check_file_target(args.html, "--html")
+    for name, value in (("--amplitude", args.amplitude), ("--serve-seconds", args.serve_seconds)):
+        if value is not None and not (np.isfinite(value) and value > 0.0):
+            raise ConfigurationError(f"{name} {value} must be a positive finite number")
     model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
                           joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)

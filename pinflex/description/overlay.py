@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from pinflex.exceptions import InvalidDescription
 ROBOT_DATA_PREFIX = "example-robot-data:"
 
 
+@functools.lru_cache(maxsize=1)
 def robot_data_dir() -> Path:
     """The ``robots/`` folder of the installed example-robot-data package."""
     import importlib.util

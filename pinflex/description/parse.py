@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import functools
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from pinflex import beam
+from pinflex.description.checks import check_annotations, check_physical, check_urdf
 from pinflex.description.overlay import apply_overlay, resolve_base
 from pinflex.description.params import Resolver, parse_parameters
+from pinflex.description.schema import Checked
+from pinflex.description.source import parse_xml, read_text
 from pinflex.description.types import (
     _NS,
     MOVING_JOINTS,
@@ -29,31 +33,60 @@ from pinflex.exceptions import (
     UnsupportedJoint,
 )
 from pinflex.sections import SHAPES, PropertyInputs, beam_properties
+from pinflex.validation import raise_problems
 
 
-def load(path: str | Path, values: dict[str, float] | None = None) -> RobotDescription:
+def load(path: str | Path, values: dict[str, float] | None = None, *,
+         plausibility: str = "refuse") -> RobotDescription:
     """Read an annotated URDF file or a pinflex overlay (see :func:`apply_overlay`).
 
-    ``values`` override ``<pinflex:parameter>`` values (checked against their bounds).
+    Every annotation is checked against :mod:`pinflex.description.schema` first (file, line,
+    element and attribute of every problem, in one error).
+
+    Args:
+        path: The file.
+        values: Overrides of ``<pinflex:parameter>`` values (checked against their bounds).
+        plausibility: 'refuse' values that are non-physical for a robot link (default), or
+            only 'warn' about them (impossible values are refused either way).
     """
     path = Path(path)
-    if not path.is_file():
-        raise InvalidDescription(f"URDF file '{path}' does not exist")
-    text = path.read_text()
-    try:
-        root_el = ET.fromstring(text)
-    except ET.ParseError as exc:
-        raise InvalidDescription(f"'{path}' is not well-formed XML: {exc}") from exc
-    if root_el.tag == _NS + "overlay":
-        base = resolve_base(root_el.get("base", ""), path.parent)
-        return parse(apply_overlay(base.read_text(), root_el), base_dir=base.parent,
-                     values=values)
-    return parse(text, base_dir=path.parent, values=values)
+    text = read_text(path, "URDF file")
+    doc = parse_xml(text, str(path))
+    if doc.root.tag == _NS + "overlay":
+        checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False)
+        raise_problems(str(path), problems, " in the overlay")
+        base = resolve_base(doc.root.get("base", ""), path.parent)
+        flexible = frozenset(el.get("link", "") for el in doc.root.findall(_NS + "flexible"))
+        base_text, base_problems = _checked_base(base, flexible, plausibility)
+        raise_problems(str(base), list(base_problems))
+        merged = apply_overlay(base_text, doc.root)
+        return _build(ET.fromstring(merged), merged, base.parent, values, str(path), checked,
+                      plausibility)
+    return parse(text, base_dir=path.parent, values=values, source=str(path),
+                 plausibility=plausibility)
+
+
+def _checked_base(base: Path, flexible: frozenset, plausibility: str):
+    """Text and problems of an overlay's base URDF (cached while the file is unchanged)."""
+    stat = base.stat()
+    return _checked_base_cached(str(base), stat.st_mtime_ns, stat.st_size, flexible,
+                                plausibility)
+
+
+@functools.lru_cache(maxsize=16)
+def _checked_base_cached(base: str, _mtime: int, _size: int, flexible: frozenset,
+                         plausibility: str):
+    base_text = read_text(base, "the overlay's base URDF")
+    base_doc = parse_xml(base_text, base)
+    _, problems = check_annotations(base_doc, plausibility=plausibility, raise_now=False)
+    problems += check_urdf(base_doc, set(flexible), upstream=True, raise_now=False)
+    return base_text, tuple(problems)
 
 
 def parse(urdf_xml: str, base_dir: Path | None = None,
-          values: dict[str, float] | None = None) -> RobotDescription:
-    """Parse URDF text with pinflex annotations.
+          values: dict[str, float] | None = None, *, source: str = "<string>",
+          plausibility: str = "refuse") -> RobotDescription:
+    """Parse URDF text with pinflex annotations, checked as :func:`load` does.
 
     Args:
         urdf_xml: The URDF text.
@@ -61,11 +94,21 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
         values: Overrides of ``<pinflex:parameter>`` values by name (checked against the
             parameters' bounds; names that are not parameters are ignored here, they may be
             point masses set by :class:`pinflex.FlexibleModel`).
+        source: Name of the text in messages.
+        plausibility: 'refuse' (default) or 'warn' about non-physical values.
     """
-    try:
-        root_el = ET.fromstring(urdf_xml)
-    except ET.ParseError as exc:
-        raise InvalidDescription(f"the URDF is not well-formed XML: {exc}") from exc
+    doc = parse_xml(urdf_xml, source)
+    checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False)
+    if doc.root.tag == "robot":
+        flexible = {el.get("link", "") for el in doc.root.findall(_NS + "flexible")}
+        problems += check_urdf(doc, flexible, raise_now=False)
+    raise_problems(source, problems)
+    return _build(doc.root, urdf_xml, base_dir, values, source, checked, plausibility)
+
+
+def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
+           values: dict[str, float] | None, source: str, checked: Checked,
+           plausibility: str) -> RobotDescription:
     if root_el.tag != "robot":
         raise InvalidDescription(f"the URDF's root element is <{root_el.tag}>, expected <robot>")
     params = parse_parameters(root_el, _NS, values)
@@ -116,7 +159,7 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
                 f"<pinflex:coordinates convention='{conv}'>: expected 'relative' or 'absolute'"
             )
         absolute = conv == "absolute"
-    return RobotDescription(
+    desc = RobotDescription(
         name=root_el.get("name", "robot"),
         urdf_xml=urdf_xml,
         base_dir=base_dir,
@@ -133,6 +176,8 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
         parameters=R.finish(),
         values={k: float(v) for k, v in (values or {}).items() if k in params},
     )
+    check_physical(desc, checked, source, plausibility=plausibility)
+    return desc
 
 
 def _vec(text: str | None, default: str, what: str) -> np.ndarray:

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from pinflex.description import RobotDescription, load
+from pinflex.description import NAMESPACE, RobotDescription, load
 from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
 from pinflex.erls import modal, plan
@@ -50,8 +50,11 @@ from pinflex.exceptions import (
     DesignVariableNotFound,
     DesignVariableOutOfBounds,
     InvalidDescription,
+    NoFlexibleLink,
 )
 from pinflex.linalg import axis_rotation, rotate_twist, translate_twist
+from pinflex.resources import check_modal
+from pinflex.validation import require_array, require_count
 
 
 def add_design_masses(M0: np.ndarray, Md: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -156,6 +159,7 @@ class FlexibleModel:
         plan.build_plan(self)
         joint_conditions.setup(self, joints)
         design_channels.setup(self)
+        check_modal(self.ndof, 1, f"the model of robot '{description.name}'")
 
     @classmethod
     def from_pinocchio(
@@ -230,7 +234,10 @@ class FlexibleModel:
             )
         if name not in self._pm_values:
             raise DesignVariableNotFound(name, self._pm_values)
-        value = float(value)
+        arr = require_array(value, f"the value of '{name}'")
+        if isinstance(value, bool) or arr.shape != ():
+            raise ConfigurationError(f"the value of '{name}' must be one number [kg]")
+        value = float(arr)
         for i, d in enumerate(self.design):
             if d.name == name:
                 if not d.lower <= value <= d.upper:
@@ -266,7 +273,7 @@ class FlexibleModel:
         configuration vector (length ``nq``, which differs from ``nv`` when the arm has
         continuous joints, stored as ``(cos θ, sin θ)``); see :meth:`from_configuration`.
         """
-        q = np.asarray(q, dtype=float)
+        q = require_array(q, "joint values q")
         if q.ndim in (1, 2) and q.shape[-1] == self.model.nq != self.nv:
             return self.from_configuration(q)
         if q.shape[-1:] != (self.nv,) or q.ndim not in (1, 2):
@@ -293,7 +300,7 @@ class FlexibleModel:
             ConfigurationError: Wrong length, non-finite values, or a (cos, sin) pair whose
                 norm is not 1 (to 1e-6).
         """
-        qpin = np.asarray(qpin, dtype=float)
+        qpin = require_array(qpin, "Pinocchio configuration")
         if qpin.shape[-1:] != (self.model.nq,) or qpin.ndim not in (1, 2):
             raise ConfigurationError(
                 f"expected Pinocchio configurations of length nq = {self.model.nq}, got shape "
@@ -325,7 +332,7 @@ class FlexibleModel:
             if unknown:
                 raise DesignVariableNotFound(sorted(unknown)[0], self.design_names)
             y = [y.get(d.name, d.nominal) for d in self.design]
-        y = np.asarray(y, dtype=float)
+        y = require_array(y, "design values y")
         if y.shape[-1:] != (self.ny,) or y.ndim not in (1, 2):
             raise ConfigurationError(
                 f"expected {self.ny} design values ({', '.join(self.design_names)}), "
@@ -563,6 +570,9 @@ class FlexibleModel:
         Returns:
             Frequencies [Hz], (k,) or (n, k).
         """
+        n_modes = self._check_modal_request(n_modes)
+        Q = self.check_q(Q)
+        check_modal(self.ndof, 1 if Q.ndim == 1 else Q.shape[0], "frequencies()")
         return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds)
 
     def eigvals_from(self, M: np.ndarray, K: np.ndarray) -> np.ndarray:
@@ -592,4 +602,27 @@ class FlexibleModel:
             ConfigurationError: Wrong number of joint values or several poses.
             EigenSolverError: Singular mass matrix or an unrestrained structure.
         """
+        n_modes = self._check_modal_request(n_modes)
+        if y is not None and not isinstance(y, dict):
+            y = require_array(y, "design values y")
+            if y.ndim == 2 and y.shape[0] == 1:
+                y = y[0]
+            elif y.ndim != 1:
+                raise ConfigurationError(
+                    f"modes() takes one design vector of {self.ny} values "
+                    f"({', '.join(self.design_names)}), got an array of shape {y.shape}"
+                )
         return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds)
+
+    def _check_modal_request(self, n_modes):
+        """Refuse a model without elastic dof and a bad ``n_modes`` (None, or 1..nx)."""
+        if self.nx == 0:
+            raise NoFlexibleLink(
+                f"robot '{self.description.name}' has no flexible link, so no elastic modes: "
+                f"declare one with <pinflex:flexible link=... elements=...> in the namespace "
+                f"{NAMESPACE} (links: {', '.join(self.description.links)})"
+            )
+        if n_modes is None:
+            return None
+        n = require_count(n_modes, "n_modes", minimum=1)
+        return min(n, self.nx)

@@ -67,8 +67,10 @@ class ModesAlong:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write one row per sample (17 significant digits); returns the path."""
+        from pinflex.outputs import atomic_path
+
         path = Path(path)
-        with open(path, "w", newline="") as stream:
+        with atomic_path(path, "CSV") as tmp, open(tmp, "w", newline="") as stream:
             w = csv.writer(stream)
             w.writerow(self.columns())
             for s in range(self.n_samples):
@@ -160,9 +162,9 @@ class ModesAlong:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="best")
         fig.tight_layout()
-        path = Path(path)
-        fig.savefig(path)
-        return path
+        from pinflex.outputs import save_figure
+
+        return save_figure(fig, path)
 
 
 def trajectory_for(arm, traj: Trajectory) -> np.ndarray:

@@ -111,14 +111,17 @@ def save_linear_model(data: dict, path: str | Path) -> Path:
     In the ``.mat`` file string arrays become char/cell arrays; the leading sample axis of
     several poses stays the first axis.
     """
-    path = Path(path)
-    if path.suffix == ".npz":
-        np.savez(path, **data)
-    elif path.suffix == ".mat":
-        import scipy.io
+    from pinflex.outputs import atomic_path
 
-        scipy.io.savemat(path, {k: (v.tolist() if v.dtype.kind == "U" else v)
-                                for k, v in ((k, np.asarray(v)) for k, v in data.items())})
-    else:
+    path = Path(path)
+    if path.suffix not in (".npz", ".mat"):
         raise ConfigurationError(f"'{path.name}': export to .npz or .mat")
+    with atomic_path(path, "exported model") as tmp, open(tmp, "wb") as stream:
+        if path.suffix == ".npz":
+            np.savez(stream, **data)
+        else:
+            import scipy.io
+
+            scipy.io.savemat(stream, {k: (v.tolist() if v.dtype.kind == "U" else v)
+                                      for k, v in ((k, np.asarray(v)) for k, v in data.items())})
     return path

@@ -12,6 +12,7 @@ from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
 from pinflex.jets import JetSpace
 from pinflex.linalg import axis_rotation, skew
 from pinflex.parametric.design import add_jets as add_design_jets
+from pinflex.resources import check_order, check_taylor
 
 
 class JetAlgebra:
@@ -129,8 +130,8 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     nvars = len(joint_idx) + len(design_idx)
     if nvars == 0:
         raise ConfigurationError("expand at least one joint or design variable")
-    if order < 0:
-        raise ConfigurationError(f"order = {order} must be >= 0")
+    order = check_order(order)
+    check_taylor(nvars, order, model.ndof, len(design_idx))
     space = JetSpace(nvars, int(order))
     nj, nd = len(joint_idx), len(design_idx)
     # The pose terms depend on the joints only: assemble in the joints' own (smaller) jet

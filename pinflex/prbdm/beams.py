@@ -211,6 +211,8 @@ def random_beam(seed: int, n_sections: int = 10, length_m: float = 1.0,
     for label, value in (("length_m", length_m), ("max_half_width_m", max_half_width_m)):
         if not np.isfinite(value) or value <= 0.0:
             raise InvalidBeam(f"{label} = {value!r} must be a finite positive number [m]")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise InvalidBeam(f"seed = {seed!r} must be a non-negative integer")
     rng = np.random.default_rng(seed)
     interior = np.sort(rng.uniform(0.0, 1.0, int(n_sections)))
     x = np.concatenate([[0.0], interior, [1.0]]) * length_m

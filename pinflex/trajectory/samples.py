@@ -159,8 +159,13 @@ class Trajectory:
         return mask
 
     def to_csv(self, path: str | Path) -> None:
-        """Write ``t, <joint names...>`` with 17 significant digits (exact round trip)."""
-        with open(path, "w", newline="") as stream:
+        """Write ``t, <joint names...>`` with 17 significant digits (exact round trip).
+
+        The file is written atomically (:func:`pinflex.outputs.atomic_path`).
+        """
+        from pinflex.outputs import atomic_path
+
+        with atomic_path(path, "trajectory CSV") as tmp, open(tmp, "w", newline="") as stream:
             writer = csv.writer(stream)
             writer.writerow(["t", *self.joint_names])
             for t, row in zip(self.times_s, self.q):
@@ -177,9 +182,17 @@ class Trajectory:
         Raises:
             InvalidTrajectory: Missing ``t`` column, ragged or non-numeric rows.
         """
+        import io
+
+        from pinflex.description.source import read_text
+
         path = Path(path)
-        with open(path, newline="") as stream:
-            rows = [row for row in csv.reader(stream) if row and not row[0].startswith("#")]
+        text = read_text(path, "trajectory CSV", InvalidTrajectory)
+        try:
+            rows = [row for row in csv.reader(io.StringIO(text, newline=""))
+                    if row and not row[0].startswith("#")]
+        except csv.Error as err:
+            raise InvalidTrajectory(f"{path.name}: not a CSV file ({err})") from err
         if not rows or rows[0][0].strip() != "t":
             raise InvalidTrajectory(
                 f"{path.name}: the first row must be a header 't, <joint names...>'"

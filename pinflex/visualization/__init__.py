@@ -36,22 +36,14 @@ from pinflex.visualization.previews import (
     mode_preview_html,
     trajectory_preview,
 )
+from pinflex.visualization.server import MeshcatServer, served_visualizer
 from pinflex.visualization.shapes import CameraView, Centreline, centrelines, mode_scale
-
-
-def served_visualizer(zmq_url: str | None = None):
-    """A ``meshcat.Visualizer`` on meshcat's local zmq server (started when no URL is given).
-
-    The server's URL is ``vis.url()``; no browser is opened.
-    """
-    meshcat = require_meshcat()
-    return meshcat.Visualizer(zmq_url=zmq_url)
-
 
 __all__ = [
     "CameraView",
     "Centreline",
     "ModesPreview",
+    "MeshcatServer",
     "OfflineWindow",
     "Preview",
     "assignment_preview_html",
@@ -63,6 +55,7 @@ __all__ = [
     "offline_visualizer",
     "prbdm_preview",
     "prbdm_preview_html",
+    "require_meshcat",
     "served_visualizer",
     "trajectory_preview",
 ]

@@ -170,11 +170,10 @@ class ModesPreview:
         return page[:k] + block + page[k:]
 
     def write_html(self, path: str | Path, initial: int | None = None) -> Path:
-        """Write :meth:`html` (folders are created); returns the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(self.html(initial), encoding="utf-8")
-        return path
+        """Write :meth:`html` atomically (folders are created); returns the path."""
+        from pinflex.outputs import write_text
+
+        return write_text(path, self.html(initial), "HTML preview")
 
 
 def modes_preview(

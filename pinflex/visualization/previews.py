@@ -56,11 +56,10 @@ class Preview:
         return self.viewer.static_html()
 
     def write_html(self, path: str | Path) -> Path:
-        """Write :meth:`html` to ``path`` (folders are created) and return the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(self.html(), encoding="utf-8")
-        return path
+        """Write :meth:`html` to ``path`` atomically (folders are created); return the path."""
+        from pinflex.outputs import write_text
+
+        return write_text(path, self.html(), "HTML preview")
 
 
 def view_direction(model: FlexibleModel) -> np.ndarray:

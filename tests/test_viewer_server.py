@@ -1,0 +1,100 @@
+"""The served meshcat viewer keeps answering and never outlives the process that started it."""
+
+import asyncio
+import os
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+
+import pytest
+from conftest import ROOT, TWO_LINK
+
+pytest.importorskip("meshcat")
+psutil = pytest.importorskip("psutil")
+
+
+def _gone(pid: int, timeout_s: float = 15.0) -> bool:
+    """Whether process ``pid`` has exited (zombies count as exited) within the timeout."""
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        try:
+            if psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
+                return True
+        except psutil.NoSuchProcess:
+            return True
+        time.sleep(0.1)
+    return False
+
+
+def test_viewer_answers_after_many_interrupted_page_loads():
+    """After 700 dropped websocket connections the viewer still answers.
+
+    Each connection logs two lines to the server's stderr; the output is drained, so the
+    server never blocks on a full pipe.
+    """
+    from tornado.websocket import websocket_connect
+
+    from pinflex.visualization import served_visualizer
+
+    vis = served_visualizer()
+    server = vis.window.pinflex_server
+    url = vis.url()
+    ws_url = url.replace("http://", "ws://").split("/static")[0] + "/"
+
+    async def drop(n, batch=20):
+        async def one():
+            conn = await websocket_connect(ws_url)
+            conn.close()
+
+        for _ in range(n // batch):
+            await asyncio.gather(*(one() for _ in range(batch)))
+
+    try:
+        asyncio.run(asyncio.wait_for(drop(700), 120))
+        with urllib.request.urlopen(url, timeout=10) as page:
+            assert page.status == 200 and b"MeshCat" in page.read()
+        assert any(line.startswith("closed:") for line in server.tail)
+    finally:
+        server.close()
+    assert not server.alive()
+
+
+def _serve(tmp_path):
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    cli = subprocess.Popen(
+        [sys.executable, "-m", "pinflex", "view", str(TWO_LINK), "--planar"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, cwd=tmp_path, text=True,
+    )
+    for line in cli.stdout:
+        if "serving the preview at" in line:
+            break
+    else:
+        cli.wait()
+        pytest.fail("pinflex view did not start serving")
+    children = psutil.Process(cli.pid).children(recursive=True)
+    assert children, "no meshcat server process"
+    return cli, [c.pid for c in children]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
+def test_viewer_server_dies_with_the_command(tmp_path, sig):
+    """Killing `pinflex view` stops the meshcat server it started: no orphan keeps the port.
+
+    SIGTERM goes through the cleanup handler, SIGKILL through the parent-death signal.
+    """
+    cli, servers = _serve(tmp_path)
+    try:
+        cli.send_signal(sig)
+        cli.wait(timeout=20)
+        assert all(_gone(pid) for pid in servers)
+    finally:
+        for pid in servers:  # never leave a server behind, even when the test fails
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        if cli.poll() is None:
+            cli.kill()
+        cli.stdout.close()
