@@ -6,7 +6,6 @@ import argparse
 import json
 import sys
 import time
-from pathlib import Path
 
 
 def add_parser(sub) -> None:
@@ -52,13 +51,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     files: list[str] = []
     if args.out:
         from pinflex.dynamics.charts import deflection_chart
+        from pinflex.outputs import output_dir, write_text
 
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+        out = output_dir(args.out)
         files.append(str(deflection_chart(reports, out / "tip_deflection.png")))
         for rep in reports:
             p = out / f"{rep.name}_series.json"
-            p.write_text(rep.to_json(series=True))
+            write_text(p, rep.to_json(series=True), "simulation JSON")
             files.append(str(p))
         if args.exaggeration > 0:
             try:

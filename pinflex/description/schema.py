@@ -14,13 +14,14 @@ Values are checked in three tiers:
   more than :data:`MAX_ELEMENTS_PER_LINK` elements, values so large that derived quantities
   would overflow (hard upper bounds ``le=``, :data:`MAX_COORDINATE`);
 * **non-physical for a robot link** (refused by default, :class:`ImplausibleValue`; a
-  :class:`PlausibilityWarning` with ``plausibility="warn"``): E outside [1e6, 1.5e12] Pa
-  (below the softest elastomers, above diamond: ``E="70"`` is 70 Pa, not 70 GPa), a density
+  :class:`PlausibilityWarning` with ``plausibility="warn"``): E below 1e6 Pa (softer than
+  the softest elastomers: ``E="70"`` is 70 Pa, not 70 GPa), a density
   outside [1, 25000] kg/m^3 (given or implied by ``linear_density / A``), a section wider than
   its link is long (``outer_diameter="120"`` is 120 m), a cross-section whose second moments
   are too small for its area (no shape has ``Iy + Iz < A^2 / (2 pi)``);
 * **implausible** (always a :class:`PlausibilityWarning`): E below 1e8 Pa (softer than
-  engineering plastics), a density below 100 or above 23000 kg/m^3, a section wider than a
+  engineering plastics) or above 1.5e12 Pa (stiffer than diamond, e.g. a deliberately stiff
+  arm standing for a rigid one), a density below 100 or above 23000 kg/m^3, a section wider than a
   third of its link (Euler-Bernoulli beams overestimate the frequencies of stubby beams), a
   torsion constant above the polar moment, a link longer than 100 m, a point mass above 10 t.
 
@@ -282,10 +283,11 @@ SCHEMA: dict[str, Element] = {
         parents=("flexible",),
         count=(1, 1),
         attrs={
-            "E": Attr(required=True, gt=0.0, le=1e15, physical=(1e6, 1.5e12),
-                      plausible=(1e8, 1.2e12), unit="Pa", why=_MATERIAL_WHY, reference=True,
+            "E": Attr(required=True, gt=0.0, le=1e20, physical=(1e6, math.inf),
+                      plausible=(1e8, 1.5e12), unit="Pa", why=_MATERIAL_WHY, reference=True,
                       doc="Young's modulus"),
-            "G": Attr(gt=0.0, le=1e15, physical=(3e5, 1e12), unit="Pa", why="G is in pascals",
+            "G": Attr(gt=0.0, le=1e20, physical=(3e5, math.inf), plausible=(0.0, 1e12),
+                      unit="Pa", why="G is in pascals",
                       reference=True, doc="shear modulus (default E / (2 (1 + poisson)))"),
             "poisson": Attr(gt=-1.0, lt=0.5, doc="Poisson's ratio (default 0.3)"),
             "density": Attr(gt=0.0, le=1e6, physical=(1.0, 25000.0), plausible=(100.0, 23000.0),

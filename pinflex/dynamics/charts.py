@@ -36,9 +36,9 @@ def deflection_chart(reports, path) -> Path:
         ax.grid(alpha=0.3)
     axes[0].set_ylabel(f"deflection of '{reports[0].frame}' [mm]")
     axes[0].legend(fontsize=8)
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    return path
+    from pinflex.outputs import save_figure
+
+    return save_figure(fig, Path(path), dpi=120)
 
 
 def bode_chart(freqs_hz, H, labels, path, *, title: str = "") -> Path:
@@ -59,6 +59,6 @@ def bode_chart(freqs_hz, H, labels, path, *, title: str = "") -> Path:
     ax1.legend(fontsize=8)
     if title:
         ax1.set_title(title, fontsize=9)
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    return path
+    from pinflex.outputs import save_figure
+
+    return save_figure(fig, Path(path), dpi=120)
