@@ -277,3 +277,15 @@ def test_modes_along_a_motion_on_a_locked_arm_are_the_locked_frequencies():
     for q, lam in zip(Q, np.asarray(tr.eigvals)):
         _, f_ref = planar_two_link_frequencies(q, 0.125, 0.125, joints=["clamped"] * 2)
         np.testing.assert_allclose(np.sqrt(lam) / (2 * np.pi), f_ref[:2], rtol=1e-9)
+
+
+def test_locked_mode_preview_names_the_joint_condition():
+    """The preview of a locked arm's mode says so and draws the locked frequency."""
+    pytest.importorskip("meshcat")
+    from pinflex.visualization import mode_preview
+
+    model = _bench("locked")
+    preview = mode_preview(model, Q0, 1)
+    assert "joints locked" in preview.caption
+    _, f_ref = planar_two_link_frequencies(Q0, 0.125, 0.125, joints=["clamped"] * 2)
+    assert preview.info["freq_hz"] == pytest.approx(f_ref[0], rel=1e-9)

@@ -55,11 +55,11 @@ def cmd_view(args: argparse.Namespace) -> int:
     model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
                           joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)
-    if not 1 <= args.mode <= model.nx:
+    if not 1 <= args.mode <= model.n_elastic:
         from pinflex.exceptions import ConfigurationError
 
         raise ConfigurationError(
-            f"mode {args.mode} does not exist: the model has elastic modes 1..{model.nx}"
+            f"mode {args.mode} does not exist: the model has elastic modes 1..{model.n_elastic}"
         )
     vis = None if args.html else served_visualizer()
     if args.trajectory:
@@ -75,7 +75,8 @@ def cmd_view(args: argparse.Namespace) -> int:
         write = preview.write_html
     else:
         n = max(int(args.modes), int(args.mode))
-        page = modes_preview(model, q, min(n, model.nx), amplitude_m=args.amplitude, viewer=vis)
+        page = modes_preview(model, q, min(n, model.n_elastic), amplitude_m=args.amplitude,
+                             viewer=vis)
         if vis is not None:
             page.select(args.mode)
         caption = page.captions[page.modes.index(args.mode)]

@@ -212,10 +212,10 @@ def modes_preview(
     """
     q = np.zeros(model.nv) if q is None else model.check_q(q)
     if modes is None:
-        modes = min(model.nx, 8)
+        modes = min(model.n_elastic, 8)
     mode_list = list(range(1, int(modes) + 1)) if np.ndim(modes) == 0 else [int(m) for m in modes]
-    if not mode_list or min(mode_list) < 1 or max(mode_list) > model.nx:
-        raise ConfigurationError(f"modes {mode_list} must lie in 1..{model.nx}")
+    if not mode_list or min(mode_list) < 1 or max(mode_list) > model.n_elastic:
+        raise ConfigurationError(f"modes {mode_list} must lie in 1..{model.n_elastic}")
     if int(frames) < 4:
         raise ConfigurationError(f"frames = {frames!r}: an oscillation needs at least 4 frames")
     import meshcat.animation as ma
@@ -250,7 +250,8 @@ def modes_preview(
         freq = float(result.freq_hz[m - 1])
         captions.append(
             f"{model.description.name}: mode {m} at {freq:.2f} Hz, q = [{qtext}] "
-            f"({model.coordinates}); peak displacement drawn {1000 * amplitude_m:.0f} mm, one "
+            f"({model.coordinates}), joints {model.joint_switch}; peak displacement drawn "
+            f"{1000 * amplitude_m:.0f} mm, one "
             f"oscillation per {period_s:g} s"
             + (f"; grid {100 * grid_info['spacing_m']:g} cm" if grid_info else "")
         )
