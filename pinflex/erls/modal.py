@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pinflex.erls import joints
+from pinflex.erls import joints, solve
 from pinflex.erls.terms import BatchAlgebra
 from pinflex.exceptions import ConfigurationError, EigenSolverError
 from pinflex.linalg import rotate_twist
@@ -117,7 +117,51 @@ def relative_joint_values(model, M: np.ndarray, K: np.ndarray):
 def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
     """Non-rigid eigenfrequencies [Hz] at one or many poses, ascending.
 
-    Batched: all poses are assembled and solved together.
+    Batched: all poses are assembled and solved together, by the conditioned solve of
+    :mod:`pinflex.erls.solve` (the same one as :func:`modes`) where it covers the model.
+
+    Returns:
+        (k,) for one pose or (n, k).
+    """
+    if not solve.supported(model):
+        return _frequencies_nodal(model, Q, y, n_modes=n_modes, check_bounds=check_bounds)
+    Q = model.check_q(Q)
+    y = model.check_y(y, bounds=check_bounds)
+    single = Q.ndim == 1
+    Qb = Q[None] if single else Q
+    if y.ndim == 2 and y.shape[0] != Qb.shape[0]:
+        raise ConfigurationError(
+            f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
+        )
+    _check_n_modes(n_modes)
+    terms = model.pose_terms(Qb)
+    M = solve.mass(model, terms, y, Qb.shape[0])
+
+    def pencil(i):  # nodal-coordinate pair of pose i, for high modes of extreme spectra
+        Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)
+        return (*reduced(model, Mi[0], Ki[0]), Mi[0])
+
+    lam = solve.eigvals(model, M, n_modes, pencil)
+    f = np.sqrt(lam) / (2.0 * np.pi)
+    return f[0] if single else f
+
+
+def _pose(terms, i: int):
+    """Pose terms of pose i of a batch."""
+    return type(terms)({k: v[i : i + 1] for k, v in terms.jac.items()},
+                       {k: v[i : i + 1] for k, v in terms.rot.items()},
+                       {k: v[i : i + 1] for k, v in terms.slide.items()})
+
+
+def _check_n_modes(n_modes) -> None:
+    if n_modes is None:
+        return
+    if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
+        raise ConfigurationError(f"n_modes = {n_modes!r}: give a positive whole number of modes")
+
+
+def _frequencies_nodal(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
+    """Frequencies from the nodal-coordinate pencil (models the conditioned solve lacks).
 
     Returns:
         (k,) for one pose or (n, k).
@@ -151,7 +195,44 @@ def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
 
 
 def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) -> ModalResult:
-    """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose."""
+    """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
+
+    Solved like :func:`frequencies` (the conditioned solve of :mod:`pinflex.erls.solve` where
+    it covers the model); the shapes are returned over the nodal coordinates ``[x; q]``.
+    """
+    if not solve.supported(model):
+        return _modes_nodal(model, q, y, n_modes=n_modes, check_bounds=check_bounds)
+    q = model.check_q(q)
+    if q.ndim != 1:
+        raise ConfigurationError("modes() takes one pose; use frequencies() for many")
+    y = model.check_y(y, bounds=check_bounds)
+    _check_n_modes(n_modes)
+    terms = model.pose_terms(q[None])
+    plan = solve.solve_plan(model)
+    twist = solve.root_twists(model, plan, terms, 1)
+    M = solve.mass(model, terms, y, 1, twist)[0]
+
+    def pencil():
+        Mx, Kx = model.matrices_from_terms(terms, y, 1)
+        return (*reduced(model, Mx[0], Kx[0]), Mx[0])
+
+    lam, sw, sx = solve.eigvecs(model, M, n_modes, pencil)
+    shapes = np.concatenate([solve.to_nodal(model, twist, sw), sx], axis=1)
+    nx = model.nx
+    k = lam.size
+    # sign: largest elastic component positive
+    phix = shapes[:nx]
+    idx = np.argmax(np.abs(phix), axis=0)
+    shapes *= np.where(phix[idx, np.arange(k)] < 0, -1.0, 1.0)[None, :]
+    positions, motion, elastic = node_fields(model, q, shapes, terms)
+    return ModalResult(
+        q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
+        node_positions=positions, node_motion=motion, node_elastic=elastic,
+    )
+
+
+def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) -> ModalResult:
+    """Modes from the nodal-coordinate pencil (models the conditioned solve lacks)."""
     import scipy.linalg
 
     q = model.check_q(q)

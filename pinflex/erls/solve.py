@@ -1,0 +1,479 @@
+"""Well-conditioned modal solve of an ERLS model: relative elastic coordinates, inverse form.
+
+Why: in the nodal coordinates ``x`` (absolute small motions of every node) the strain energy
+of a smooth mode is a small difference of large nodal terms, and the stiffness condition
+number grows like N⁴ with N elements per link. A generalized eigensolver working on
+``(Kₓₓ, Mred)`` then loses digits on the low modes as the mesh is refined (a two-link arm with
+1024 elements on one link: relative errors of 1e-5 on mode 1).
+
+What this module does instead (same eigenvalues in exact arithmetic):
+
+* **Relative coordinates.** On every flexible link, node ``k`` moves as the rigid transport of
+  node ``k − 1`` plus its own relative motion ``z_k`` (beam axes, the node's kept dofs); node 0
+  is the joint attachment on the parent (the ERLS rule). A Hermite beam element does not strain
+  under a rigid motion, so element ``k``'s strain energy is ``z_kᵀ K_tip z_k`` with ``K_tip``
+  the element's tip block (clamped root): the stiffness is exactly block diagonal and constant.
+* **Scaled by the element blocks.** With ``K_tip = D Dᵀ`` (Cholesky) the solver coordinates
+  are ``w_k = Dᵀ z_k``: the stiffness is the identity, and the mass ``B(q, y)`` is assembled
+  directly in ``w`` from constant per-link blocks (the pose enters through the root twists of
+  the links and the frame Jacobians only), so the assembly scatters small blocks instead of
+  multiplying dense selection matrices.
+* **Inverse form.** The non-rigid eigenvalues are ``λ = 1/μ`` with ``μ`` the eigenvalues of the
+  symmetric ``Bred`` (the rigid joint coordinates condensed out). A backward-stable symmetric
+  eigensolver gives every ``μ`` to an absolute error of about ``n ε μ_max``: the low modes (the
+  large ``μ``) keep full relative accuracy at any mesh size, mode ``k`` has a relative rounding
+  error of about ``n ε λ_k / λ_1``. That is below the discretization error of mode ``k`` as
+  long as ``ε N⁴ ≪ 1`` (the highest modes of a mesh are the least accurate in both respects);
+  :func:`rounding_bound` returns the estimate, and modes whose eigenvalue is not resolved
+  (``μ`` at the noise level) are refused.
+
+Cost: one symmetric eigensolve of ``Bred`` per pose (batched over poses with NumPy), with no
+Cholesky of the mass, no ``sygst`` and no explicit inverse: less work than a generalized
+eigensolver of the same size.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from pinflex import beam
+from pinflex.erls.terms import _offset_block, _rot6
+from pinflex.exceptions import EigenSolverError
+from pinflex.kinematics import rotate_twist, translate_twist
+
+_EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True)
+class _LinkCore:
+    """Constant blocks of one flexible link in solver coordinates."""
+
+    link: str
+    start: int  # first solver column of the link (columns start:stop)
+    stop: int
+    C: np.ndarray  # (6(N+1), rN) node twists (beam axes) from the link's own w
+    R: np.ndarray  # (6(N+1), 6) node twists from the root twist (link axes)
+    H_oo: np.ndarray  # blocks of Aᵀ M_link A, A = [C, R, J] on the kept rows
+    H_oe: np.ndarray
+    H_ov: np.ndarray
+    H_ee: np.ndarray
+    H_ev: np.ndarray
+    H_vv: np.ndarray
+    x_rows: np.ndarray  # rows of C/R giving the link's nodal coordinates x (nodes 1..N)
+
+
+@dataclass(frozen=True)
+class _Attach:
+    """Elastic twist (link axes) at a point = const @ w[start:stop] + lin @ root twist."""
+
+    start: int
+    stop: int
+    const: np.ndarray | None  # (6, stop - start)
+    lin: np.ndarray | None  # (6, 6)
+
+
+@dataclass(frozen=True)
+class SolvePlan:
+    """Everything constant of the conditioned solve of one model (built once, cached)."""
+
+    cores: dict
+    joint_attach: tuple  # per model._joints entry
+    pm_attach: tuple  # per model._point_masses entry
+    nx: int
+    nv: int
+
+
+def _transport(d: float) -> np.ndarray:
+    """Rigid transport of a node twist by ``d`` along the beam axis (beam axes)."""
+    return translate_twist(np.array([d, 0.0, 0.0]))
+
+
+def solve_plan(model) -> SolvePlan:
+    """The (cached) constant data of the conditioned solve."""
+    cached = model.__dict__.get("_solve_plan")
+    if cached is not None:
+        return cached
+    cores = {}
+    nx = model.nx
+    for link, p in model._flex.items():
+        spec = p.spec
+        n = spec.elements
+        le = spec.length_m / n
+        rows = np.asarray(p.rows)
+        r = rows.size // (n + 1)
+        nd = rows[:r]
+        sec = spec.section
+        ke = beam.element_stiffness(le, spec.E * sec.A, spec.G * sec.J, spec.E * sec.Iy,
+                                    spec.E * sec.Iz)
+        kt = ke[6:, 6:][np.ix_(nd, nd)]
+        try:
+            Dt = np.linalg.cholesky(kt).T  # kt = Dtᵀ Dt, w = Dt z
+        except np.linalg.LinAlgError as exc:  # pragma: no cover - guarded by the parser
+            raise EigenSolverError(f"the element stiffness of link '{link}' is not positive"
+                                   ) from exc
+        zinv = np.linalg.inv(Dt)  # z = zinv @ w (r × r, well conditioned per element)
+        # node k from w_j (j <= k): P((k - j) le) E zinv, P(d) = I + d O (rigid transport)
+        P0 = np.eye(6)[:, nd] @ zinv
+        Ofs = (_transport(1.0) - np.eye(6))[:, nd] @ zinv
+        kk = np.arange(n + 1)[:, None]
+        jj = np.arange(1, n + 1)[None, :]
+        below = (jj <= kk).astype(float)
+        C = (below[:, None, :, None] * P0[None, :, None, :]
+             + (below * (kk - jj) * le)[:, None, :, None] * Ofs[None, :, None, :])
+        C = C.reshape(6 * (n + 1), r * n)
+        rb = rotate_twist(spec.rotation.T)
+        R = np.concatenate([_transport(k * le) @ rb for k in range(n + 1)])
+        A = np.concatenate([C, R, p.jac], axis=1)[rows]
+        Mk = sp.csr_matrix(p.mass[np.ix_(rows, rows)])  # block tridiagonal
+        X = np.asarray(Mk @ A)
+        H = np.empty((A.shape[1], A.shape[1]))
+        H[r * n :] = A[:, r * n :].T @ X
+        H[: r * n] = _cumulative_transpose(X, P0[nd], Ofs[nd], le, n, r)
+        H = 0.5 * (H + H.T)
+        o = r * n
+        start = int(p.x_cols[0])
+        assert np.array_equal(p.x_cols, np.arange(start, start + o))
+        cores[link] = _LinkCore(
+            link, start, start + o, C, R, H[:o, :o], H[:o, o : o + 6], H[:o, o + 6 :],
+            H[o : o + 6, o : o + 6], H[o : o + 6, o + 6 :], H[o + 6 :, o + 6 :], rows[r:],
+        )
+    joint_attach = tuple(_attach(model, cores, j.parent, j.xyz) for j in model._joints)
+    pm_attach = tuple(_attach(model, cores, p[1], p[2]) for p in model._point_masses)
+    plan = SolvePlan(cores, joint_attach, pm_attach, nx, model.nv)
+    model.__dict__["_solve_plan"] = plan
+    return plan
+
+
+def _cumulative_transpose(X, P0, Ofs, le, n, r):
+    """``C[rows]ᵀ X`` by reverse cumulative sums (C: node k from w_j, j ≤ k), O(n · cols)."""
+    Xn = X.reshape(n + 1, r, -1)[1:]  # node 0 rows do not see the link's own w
+    k = np.arange(1, n + 1, dtype=float)[:, None, None]
+    S0 = np.cumsum(Xn[::-1], axis=0)[::-1]
+    S1 = np.cumsum((k * Xn)[::-1], axis=0)[::-1]
+    out = P0.T @ S0 + le * (Ofs.T @ (S1 - k * S0))
+    return out.reshape(r * n, -1)
+
+
+def _attach(model, cores, link: str, point: np.ndarray) -> _Attach:
+    """Elastic twist at a point given in the frame of ``link`` (link axes)."""
+    core = cores.get(link)
+    if core is None:
+        return _Attach(0, 0, None, translate_twist(point))
+    spec = model._flex[link].spec
+    L, n = spec.length_m, spec.elements
+    xdir = spec.tip / L
+    s = float(np.clip(point @ xdir, 0.0, L))
+    le = L / n
+    e = min(int(s / le), n - 1)
+    shape = beam.shape_matrix(le, np.array([s / le - e]))[0]
+    to_link = translate_twist(point - s * xdir) @ rotate_twist(spec.rotation)
+    rows = slice(6 * e, 6 * e + 12)
+    const = to_link @ shape @ core.C[rows]
+    return _Attach(core.start, core.stop, const, to_link @ shape @ core.R[rows])
+
+
+def _twist_at(att: _Attach, root, b: int, nx: int):
+    """Elastic twist (b, 6, nx) at an attachment, or None when it is identically zero."""
+    if att.const is None and root is None:
+        return None
+    out = np.zeros((b, 6, nx)) if root is None else att.lin @ root
+    if att.const is not None:
+        out[:, :, att.start : att.stop] += att.const
+    return out
+
+
+def root_twists(model, plan: SolvePlan, terms, b: int) -> dict:
+    """Elastic twist of every link root (link axes) in solver coordinates, (b, 6, nx)."""
+    twist = {model._order[0]: None}
+    for j, att in zip(model._joints, plan.joint_attach):
+        tau = _twist_at(att, twist[j.parent], b, plan.nx)
+        if tau is None:
+            twist[j.child] = None
+            continue
+        if j.kind == "prismatic":
+            tau = tau + _offset_block(terms.slide[j.name]) @ tau
+            RT = j.R_o.T
+        elif j.kind == "revolute":
+            RT = np.swapaxes(terms.rot[j.name], -1, -2)
+        else:
+            RT = j.R_o.T
+        twist[j.child] = j.proj @ (_rot6(RT) @ tau)
+    return twist
+
+
+def mass(model, terms, y: np.ndarray, b: int, twist=None) -> np.ndarray:
+    """Mass matrix (b, ndof, ndof) in solver coordinates ``[w; q]`` (stiffness: ``I`` on w).
+
+    Args:
+        model: The flexible model.
+        terms: Pose terms of ``b`` poses.
+        y: Checked design values (ny,) or (b, ny).
+        b: Number of poses.
+        twist: Root twists from :func:`root_twists` when the caller has them.
+    """
+    plan = solve_plan(model)
+    nx, nv = plan.nx, plan.nv
+    nd = nx + nv
+    if twist is None:
+        twist = root_twists(model, plan, terms, b)
+    M = np.zeros((b, nd, nd))
+    for link, c in plan.cores.items():
+        a, z = c.start, c.stop
+        J = terms.jac[link]
+        e = twist[link]
+        M[:, a:z, a:z] += c.H_oo
+        if nv:
+            X = c.H_ov @ J
+            M[:, a:z, nx:] += X
+            M[:, nx:, a:z] += np.swapaxes(X, -1, -2)
+            M[:, nx:, nx:] += np.swapaxes(J, -1, -2) @ (c.H_vv @ J)
+        if e is not None:
+            ep = e[:, :, :a]  # a root twist only depends on upstream links' coordinates
+            X = c.H_oe @ ep
+            M[:, a:z, :a] += X
+            M[:, :a, a:z] += np.swapaxes(X, -1, -2)
+            epT = np.swapaxes(ep, -1, -2)
+            M[:, :a, :a] += epT @ (c.H_ee @ ep)
+            if nv:
+                X = epT @ (c.H_ev @ J)
+                M[:, :a, nx:] += X
+                M[:, nx:, :a] += np.swapaxes(X, -1, -2)
+    for link, inertia in model._inertias.items():
+        e = twist[link]
+        J = terms.jac[link]
+        g = np.zeros((b, 6, nd))
+        if e is not None:
+            g[:, :, :nx] = e
+        g[:, :, nx:] = J
+        M += np.swapaxes(g, -1, -2) @ (inertia @ g)
+    design_index = {d.name: i for i, d in enumerate(model.design)}
+    for (name, link, xyz, _), att in zip(model._point_masses, plan.pm_attach):
+        if name in design_index:
+            value = y[..., design_index[name]]
+        else:
+            value = model._pm_values[name]
+        value = np.broadcast_to(np.asarray(value, dtype=float), (b,))
+        if not np.any(value):
+            continue
+        tau = _twist_at(att, twist[link], b, nx)
+        g = np.zeros((b, 3, nd))
+        if tau is not None:
+            g[:, :, :nx] = tau[:, :3]
+        g[:, :, nx:] = (translate_twist(xyz) @ terms.jac[link])[:, :3]
+        M += value[:, None, None] * (np.swapaxes(g, -1, -2) @ g)
+    return M
+
+
+def condense(model, M: np.ndarray):
+    """Elastic mass with the rigid joint coordinates condensed out, and the solve pieces.
+
+    Returns:
+        ``(Bred, Lq, Y)`` with ``Bred = Mww − Yᵀ Y``, ``Y = Lq⁻¹ Mqw`` and ``Lq`` the
+        Cholesky factor of ``Mqq`` (None without joints).
+    """
+    nx = model.nx
+    Mww = M[..., :nx, :nx]
+    if not model.nv:
+        return Mww, None, None
+    try:
+        Lq = np.linalg.cholesky(M[..., nx:, nx:])
+    except np.linalg.LinAlgError as exc:
+        raise EigenSolverError(
+            "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
+            "add inertia to the links it drives"
+        ) from exc
+    Y = np.linalg.solve(Lq, M[..., nx:, :nx])
+    return Mww - np.swapaxes(Y, -1, -2) @ Y, Lq, Y
+
+
+def noise_level(mu: np.ndarray) -> np.ndarray:
+    """Absolute rounding level ``c ε μ_max`` of the computed μ (per pose), (...,).
+
+    A backward-stable symmetric eigensolver perturbs ``Bred`` by about ``ε ‖Bred‖``; an
+    eigenvalue ``μ`` below ``64 ε μ_max`` has no reliable digit left.
+    """
+    return 64.0 * _EPS * np.max(np.abs(mu), axis=-1)
+
+
+def rounding_bound(lam: np.ndarray) -> np.ndarray:
+    """Estimated relative rounding error of each eigenvalue ``λ_k`` (same shape as ``lam``).
+
+    ``≈ c n ε λ_k / λ_1`` (see the module docstring), ``n`` the number of elastic coordinates.
+    """
+    lam = np.asarray(lam, dtype=float)
+    n = lam.shape[-1]
+    return 8.0 * max(n, 1) * _EPS * lam / lam[..., :1]
+
+
+def _finite(values: np.ndarray) -> None:
+    if not np.all(np.isfinite(values)):
+        raise EigenSolverError("the eigensolver returned non-finite values: the mass or the "
+                               "stiffness of the model is not finite")
+
+
+def _unresolved(first: int, detail: str) -> EigenSolverError:
+    return EigenSolverError(
+        f"elastic mode {first} is not resolved: {detail}; the model is near-singular (a link "
+        "that is too soft, too heavy or too long for its section, or a mass that is not "
+        "positive): check the units of E, the section and the lengths"
+    )
+
+
+def resolved(mu: np.ndarray) -> int:
+    """Number of leading (descending) μ above the rounding level, the least over poses."""
+    if mu.shape[-1] == 0:
+        return 0
+    ok = mu > noise_level(mu)[..., None]
+    ok = np.all(ok.reshape(-1, mu.shape[-1]), axis=0)
+    return int(np.argmin(ok)) if not np.all(ok) else mu.shape[-1]
+
+
+def _direct(pencil, lo: int, k: int, vectors: bool):
+    """Modes ``lo..k-1`` from the nodal-coordinate pencil (accurate for the high modes).
+
+    ``pencil()`` returns ``(Mred, Kxx, M)`` (one pose, nodal coordinates). The direct
+    generalized solve resolves eigenvalues above ``64 ε λ_max``; a mode resolved by neither
+    form is refused.
+    """
+    import scipy.linalg
+
+    Mred, Kxx, _ = pencil()
+    nx = Kxx.shape[-1]
+    out = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[lo, nx - 1], eigvals_only=not vectors,
+                            check_finite=False)
+    lam = out if not vectors else out[0]
+    _finite(lam)
+    if lam[0] <= 64.0 * _EPS * lam[-1]:
+        raise _unresolved(lo + 1, "neither the relative-coordinate (inverse) nor the nodal "
+                          f"(direct) form resolves it: λ spans {lam[-1]:.3e} down to below "
+                          "both rounding levels")
+    if not vectors:
+        return lam[: k - lo], None
+    return lam[: k - lo], out[1][:, : k - lo]
+
+
+LANCZOS_MIN_DOF = 400
+
+
+def use_lanczos(n: int, k: int) -> bool:
+    """Whether the ``k`` largest μ of an ``n × n`` Bred go to Lanczos instead of a dense solve.
+
+    Lanczos (ARPACK, through :func:`scipy.sparse.linalg.eigsh`) needs a few dozen products
+    with ``Bred`` (O(n²) each) where a dense solve needs O(n³); the largest μ = 1/λ are the
+    best separated part of the spectrum (μ_k ∝ k⁻⁴ for bending), so it converges fast.
+    """
+    return n >= LANCZOS_MIN_DOF and 4 * k <= n
+
+
+def _lanczos(B: np.ndarray, k: int, vectors: bool):
+    """The ``k`` largest eigenvalues of a symmetric B, descending (and vectors, ascending)."""
+    from scipy.sparse.linalg import ArpackNoConvergence, eigsh
+
+    n = B.shape[0]
+    v0 = np.full(n, 1.0 / np.sqrt(n))
+    try:
+        out = eigsh(B, k=k, which="LA", v0=v0, ncv=min(n, max(2 * k + 1, 20)), tol=0.0,
+                    return_eigenvectors=vectors)
+    except ArpackNoConvergence as exc:
+        raise EigenSolverError(f"the Lanczos iteration did not converge on {k} modes of "
+                               f"{n}: ask for fewer modes or all of them (dense solve)") from exc
+    if vectors:
+        order = np.argsort(out[0])
+        return out[0][order], out[1][:, order]
+    return np.sort(out)[::-1], None
+
+
+def eigvals(model, M: np.ndarray, n_modes: int | None = None, pencil=None) -> np.ndarray:
+    """Non-rigid eigenvalues λ (ascending) from stacked solver-coordinate masses (b, nd, nd).
+
+    Args:
+        model: The flexible model.
+        M: Solver-coordinate masses from :func:`mass`.
+        n_modes: Number of lowest modes wanted (default all).
+        pencil: ``pencil(i)`` returns the nodal-coordinate ``(Mred, Kxx, M)`` of pose ``i``;
+            used to recover requested high modes that the inverse form does not resolve
+            (without it they are refused).
+    """
+    nx = model.nx
+    k = nx if n_modes is None else min(int(n_modes), nx)
+    if nx == 0:
+        return np.zeros(M.shape[:-2] + (0,))
+    Bred, _, _ = condense(model, M)
+    if use_lanczos(nx, k):
+        mu = np.stack([_lanczos(B, k, False)[0] for B in Bred.reshape(-1, nx, nx)])
+        mu = mu.reshape(Bred.shape[:-2] + (k,))
+    else:
+        mu = np.linalg.eigvalsh(Bred)[..., ::-1]
+    _finite(mu)
+    lam = 1.0 / mu[..., :k]
+    good = mu > noise_level(mu)[..., None]
+    for idx in zip(*np.nonzero(~np.all(good[..., :k], axis=-1))):
+        r = int(np.argmin(good[idx]))
+        if pencil is None:
+            raise _unresolved(r + 1, "its eigenvalue is below the rounding level of the mass")
+        lam[idx][r:] = _direct(lambda i=idx: pencil(*i), r, k, False)[0]
+    return lam
+
+
+def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
+    """Eigenvalues λ (k,) and mass-normalised shapes of one pose.
+
+    Returns:
+        ``(lam, shapes_w, shapes_x)``: the modes the inverse form resolves as solver-coordinate
+        shapes ``[w; q]`` (nd, r), and the rest (recovered from the nodal pencil, see
+        :func:`eigvals`) directly over ``[x; q]`` (nd, k - r). The q part is the condensed
+        rigid-coordinate response.
+    """
+    import scipy.linalg
+
+    nx = model.nx
+    k = nx if n_modes is None else min(int(n_modes), nx)
+    Bred, Lq, Y = condense(model, M)
+    nd = M.shape[-1]
+    if k == 0:
+        return np.zeros(0), np.zeros((nd, 0)), np.zeros((nd, 0))
+    if use_lanczos(nx, k):
+        mu, V = _lanczos(Bred, k, True)
+    elif k == nx:
+        mu, V = np.linalg.eigh(Bred)
+    else:
+        mu, V = scipy.linalg.eigh(Bred, subset_by_index=[nx - k, nx - 1], driver="evr",
+                                  check_finite=False)
+    mu, V = mu[::-1], V[:, ::-1]
+    _finite(mu)
+    r = resolved(mu)  # the rounding level needs the largest μ only: mu[0]
+    phi_w = V[:, :r] / np.sqrt(mu[:r])[None, :]
+    shapes_w = np.zeros((nd, r))
+    shapes_w[:nx] = phi_w
+    if Lq is not None:
+        shapes_w[nx:] = -scipy.linalg.solve_triangular(Lq, Y @ phi_w, lower=True, trans="T")
+    lam = 1.0 / mu
+    shapes_x = np.zeros((nd, k - r))
+    if r < k:
+        if pencil is None:
+            raise _unresolved(r + 1, "its eigenvalue is below the rounding level of the mass")
+        lam_d, phix = _direct(lambda: pencil(), r, k, True)
+        lam[r:] = lam_d
+        Mfull = pencil()[2]
+        shapes_x[:nx] = phix
+        if model.nv:
+            shapes_x[nx:] = -np.linalg.solve(Mfull[nx:, nx:], Mfull[nx:, :nx] @ phix)
+    return lam, shapes_w, shapes_x
+
+
+def to_nodal(model, twist: dict, shapes: np.ndarray) -> np.ndarray:
+    """Shapes over ``[x; q]`` (nodal coordinates) of solver-coordinate shapes ``[w; q]``."""
+    plan = solve_plan(model)
+    nx = plan.nx
+    out = np.array(shapes, dtype=float)
+    w = shapes[:nx]
+    for link, c in plan.cores.items():
+        x = c.C[c.x_rows] @ w[c.start : c.stop]
+        e = twist[link]
+        if e is not None:
+            x = x + c.R[c.x_rows] @ (e[0] @ w)
+        out[c.start : c.stop] = x
+    return out
