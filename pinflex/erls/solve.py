@@ -40,9 +40,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from pinflex import beam
-from pinflex.erls.terms import _offset_block, _rot6
+from pinflex.erls.terms import _offset_block
 from pinflex.exceptions import EigenSolverError
-from pinflex.kinematics import rotate_twist, translate_twist
+from pinflex.linalg import rotate_twist, translate_twist
 
 _EPS = np.finfo(float).eps
 
@@ -200,7 +200,7 @@ def root_twists(model, plan: SolvePlan, terms, b: int) -> dict:
             RT = np.swapaxes(terms.rot[j.name], -1, -2)
         else:
             RT = j.R_o.T
-        twist[j.child] = j.proj @ (_rot6(RT) @ tau)
+        twist[j.child] = j.proj @ (rotate_twist(RT) @ tau)
     return twist
 
 
