@@ -86,6 +86,17 @@ class SolvePlan:
     nv: int
 
 
+def supported(model) -> bool:
+    """Whether this solve covers the model.
+
+    It does for free joints and point-mass design variables; other joint conditions and
+    design variables that change the beams (sections, materials) go through the nodal pencil.
+    """
+    plain = bool(getattr(model, "_joints_plain", True))
+    masses = all(d.name in model._pm_values for d in model.design)
+    return plain and masses and model.nx > 0
+
+
 def _transport(d: float) -> np.ndarray:
     """Rigid transport of a node twist by ``d`` along the beam axis (beam axes)."""
     return translate_twist(np.array([d, 0.0, 0.0]))
@@ -175,96 +186,141 @@ def _attach(model, cores, link: str, point: np.ndarray) -> _Attach:
     return _Attach(core.start, core.stop, const, to_link @ shape @ core.R[rows])
 
 
-def _twist_at(att: _Attach, root, b: int, nx: int):
-    """Elastic twist (b, 6, nx) at an attachment, or None when it is identically zero."""
+class _Batch:
+    """Leading axis of poses: constants apply to every pose, products are plain."""
+
+    const_at = slice(None)
+
+    def __init__(self, size: int):
+        self.size = size
+
+    @staticmethod
+    def mm(a, b):
+        return a @ b
+
+
+def _algebra(alg, b: int):
+    """``alg`` as used here: the batch algebra of ``b`` poses, or a jet algebra.
+
+    A jet algebra (``pinflex.parametric.matrices.JetAlgebra``) has the Taylor coefficients on
+    the leading axis: constants enter the constant coefficient only, and the product of two
+    pose-dependent factors is the truncated Cauchy product (``alg.mm``); a constant times a
+    jet is a plain product.
+    """
+    if alg is None or not hasattr(alg, "space"):
+        return _Batch(b)
+    alg.size = alg.space.ncoef
+    alg.const_at = 0
+    return alg
+
+
+def _twist_at(att: _Attach, root, alg, nx: int):
+    """Elastic twist (lead, 6, nx) at an attachment, or None when it is identically zero."""
     if att.const is None and root is None:
         return None
-    out = np.zeros((b, 6, nx)) if root is None else att.lin @ root
+    out = np.zeros((alg.size, 6, nx)) if root is None else att.lin @ root
     if att.const is not None:
-        out[:, :, att.start : att.stop] += att.const
+        out[alg.const_at, :, att.start : att.stop] += att.const
     return out
 
 
-def root_twists(model, plan: SolvePlan, terms, b: int) -> dict:
+def root_twists(model, plan: SolvePlan, terms, b: int, alg=None) -> dict:
     """Elastic twist of every link root (link axes) in solver coordinates, (b, 6, nx)."""
+    alg = _algebra(alg, b)
     twist = {model._order[0]: None}
     for j, att in zip(model._joints, plan.joint_attach):
-        tau = _twist_at(att, twist[j.parent], b, plan.nx)
+        tau = _twist_at(att, twist[j.parent], alg, plan.nx)
         if tau is None:
             twist[j.child] = None
             continue
         if j.kind == "prismatic":
-            tau = tau + _offset_block(terms.slide[j.name]) @ tau
-            RT = j.R_o.T
+            tau = tau + alg.mm(_offset_block(terms.slide[j.name]), tau)
+            rotated = rotate_twist(j.R_o.T) @ tau
         elif j.kind == "revolute":
-            RT = np.swapaxes(terms.rot[j.name], -1, -2)
+            rotated = alg.mm(rotate_twist(np.swapaxes(terms.rot[j.name], -1, -2)), tau)
         else:
-            RT = j.R_o.T
-        twist[j.child] = j.proj @ (rotate_twist(RT) @ tau)
+            rotated = rotate_twist(j.R_o.T) @ tau
+        twist[j.child] = j.proj @ rotated
     return twist
 
 
-def mass(model, terms, y: np.ndarray, b: int, twist=None) -> np.ndarray:
+def mass(model, terms, y: np.ndarray, b: int, twist=None, *, alg=None, split=False):
     """Mass matrix (b, ndof, ndof) in solver coordinates ``[w; q]`` (stiffness: ``I`` on w).
 
     Args:
         model: The flexible model.
-        terms: Pose terms of ``b`` poses.
-        y: Checked design values (ny,) or (b, ny).
+        terms: Pose terms of ``b`` poses (or their jets, with ``alg``).
+        y: Checked design values (ny,) or (b, ny) (unused with ``split``).
         b: Number of poses.
         twist: Root twists from :func:`root_twists` when the caller has them.
+        alg: A jet algebra to assemble Taylor coefficients instead of poses.
+        split: Return ``(M0, Mdesign)``: the mass without design point masses and the mass
+            per unit design value, (ny, lead, nd, nd).
     """
     plan = solve_plan(model)
+    alg = _algebra(alg, b)
+    mm, c0, lead = alg.mm, alg.const_at, alg.size
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
     if twist is None:
-        twist = root_twists(model, plan, terms, b)
-    M = np.zeros((b, nd, nd))
+        twist = root_twists(model, plan, terms, b, alg)
+    M = np.zeros((lead, nd, nd))
     for link, c in plan.cores.items():
         a, z = c.start, c.stop
         J = terms.jac[link]
         e = twist[link]
-        M[:, a:z, a:z] += c.H_oo
+        M[c0, a:z, a:z] += c.H_oo
         if nv:
             X = c.H_ov @ J
             M[:, a:z, nx:] += X
             M[:, nx:, a:z] += np.swapaxes(X, -1, -2)
-            M[:, nx:, nx:] += np.swapaxes(J, -1, -2) @ (c.H_vv @ J)
+            M[:, nx:, nx:] += mm(np.swapaxes(J, -1, -2), c.H_vv @ J)
         if e is not None:
             ep = e[:, :, :a]  # a root twist only depends on upstream links' coordinates
             X = c.H_oe @ ep
             M[:, a:z, :a] += X
             M[:, :a, a:z] += np.swapaxes(X, -1, -2)
             epT = np.swapaxes(ep, -1, -2)
-            M[:, :a, :a] += epT @ (c.H_ee @ ep)
+            M[:, :a, :a] += mm(epT, c.H_ee @ ep)
             if nv:
-                X = epT @ (c.H_ev @ J)
+                X = mm(epT, c.H_ev @ J)
                 M[:, :a, nx:] += X
                 M[:, nx:, :a] += np.swapaxes(X, -1, -2)
     for link, inertia in model._inertias.items():
         e = twist[link]
         J = terms.jac[link]
-        g = np.zeros((b, 6, nd))
+        g = np.zeros((lead, 6, nd))
         if e is not None:
             g[:, :, :nx] = e
         g[:, :, nx:] = J
-        M += np.swapaxes(g, -1, -2) @ (inertia @ g)
+        M += mm(np.swapaxes(g, -1, -2), inertia @ g)
     design_index = {d.name: i for i, d in enumerate(model.design)}
+    Md = np.zeros((model.ny, lead, nd, nd)) if split else None
     for (name, link, xyz, _), att in zip(model._point_masses, plan.pm_attach):
-        if name in design_index:
-            value = y[..., design_index[name]]
+        design = name in design_index
+        if design and split:
+            value = None
+        elif design:
+            value = np.broadcast_to(np.asarray(y[..., design_index[name]], float), (lead,))
+            if not np.any(value):
+                continue
         else:
             value = model._pm_values[name]
-        value = np.broadcast_to(np.asarray(value, dtype=float), (b,))
-        if not np.any(value):
-            continue
-        tau = _twist_at(att, twist[link], b, nx)
-        g = np.zeros((b, 3, nd))
+            if value == 0.0:
+                continue
+        tau = _twist_at(att, twist[link], alg, nx)
+        g = np.zeros((lead, 3, nd))
         if tau is not None:
             g[:, :, :nx] = tau[:, :3]
         g[:, :, nx:] = (translate_twist(xyz) @ terms.jac[link])[:, :3]
-        M += value[:, None, None] * (np.swapaxes(g, -1, -2) @ g)
-    return M
+        m = mm(np.swapaxes(g, -1, -2), g)
+        if value is None:
+            Md[design_index[name]] = m
+        elif np.ndim(value):
+            M += value[:, None, None] * m
+        else:
+            M += value * m
+    return (M, Md) if split else M
 
 
 def condense(model, M: np.ndarray):

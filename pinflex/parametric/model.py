@@ -10,7 +10,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from pinflex import jets
-from pinflex.erls import FlexibleModel
+from pinflex.erls import FlexibleModel, solve
 from pinflex.exceptions import (
     ConfigurationError,
     EigenSolverError,
@@ -18,6 +18,7 @@ from pinflex.exceptions import (
     TaylorRadiusWarning,
 )
 from pinflex.jets import JetSpace
+from pinflex.parametric.conditioned import expansion_eigenpairs, solver_matrix_jets
 from pinflex.parametric.eigen import eigen_jets, radius_estimate, spectrum_slopes
 from pinflex.parametric.matrices import matrix_jets
 
@@ -347,11 +348,14 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
     modes = tuple(int(m) for m in np.atleast_1d(modes))
     if min(modes) < 1 or max(modes) > model.n_elastic:
         raise ConfigurationError(f"modes {modes} must lie in 1..{model.n_elastic}")
-    space, M, K, jidx, didx = matrix_jets(model, q0, y0, order=order, joints=joints,
-                                          design=design)
+    jets_of = solver_matrix_jets if solve.supported(model) else matrix_jets
+    space, M, K, jidx, didx = jets_of(model, q0, y0, order=order, joints=joints, design=design)
     idx = [model.n_rigid + m - 1 for m in modes]
     try:
-        w, V = sla.eigh(K[0], M[0], check_finite=False)
+        if jets_of is solver_matrix_jets:
+            w, V = expansion_eigenpairs(model, M[0])
+        else:
+            w, V = sla.eigh(K[0], M[0], check_finite=False)
     except np.linalg.LinAlgError as exc:
         raise EigenSolverError(
             "the generalized eigenproblem at the expansion point failed: M(x0) must be "

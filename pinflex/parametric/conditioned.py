@@ -1,0 +1,98 @@
+"""Taylor coefficients of the ERLS pencil in the solver coordinates of :mod:`pinflex.erls.solve`.
+
+In the relative, element-scaled elastic coordinates ``w`` the stiffness is the identity on
+``w`` (zero on the joints) at every pose, and the mass is assembled from constant per-link
+blocks: the only pose-dependent factors are the links' root twists (6 × nx) and frame
+Jacobians (6 × nv). Their jets are small, so the truncated products of the assembly cost a
+small fraction of those of the nodal-coordinate assembly (:func:`matrix_jets`), whose factors
+are the full nodal motion matrices of every link. Eigenvalues are invariant under the change
+of coordinates, so their Taylor coefficients are the same.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from pinflex.erls import FlexibleModel, solve
+from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
+from pinflex.jets import JetSpace
+from pinflex.parametric.matrices import JetAlgebra, pose_jets
+
+
+def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
+                       joints: Sequence[str] | None = None,
+                       design: Sequence[str] | None = None):
+    """Exact Taylor coefficients of ``M`` and ``K`` over the solver coordinates ``[w; q]``.
+
+    Same arguments and returns as :func:`pinflex.parametric.matrix_jets`; only the
+    coordinates of the matrices differ (their eigenvalues are the same).
+    """
+    q0 = model.check_q(q0).astype(float)
+    if q0.ndim != 1:
+        raise ConfigurationError("the expansion point must be a single pose")
+    y0 = model.check_y(y0)
+    joint_idx = [model.joint_index(n) for n in (model.joint_names if joints is None else joints)]
+    names = model.design_names if design is None else tuple(design)
+    design_idx = []
+    for n in names:
+        if n not in model.design_names:
+            raise DesignVariableNotFound(n, model.design_names)
+        design_idx.append(model.design_names.index(n))
+    nvars = len(joint_idx) + len(design_idx)
+    if nvars == 0:
+        raise ConfigurationError("expand at least one joint or design variable")
+    if order < 0:
+        raise ConfigurationError(f"order = {order} must be >= 0")
+    space = JetSpace(nvars, int(order))
+    nj, nd = len(joint_idx), len(design_idx)
+    if nj:
+        qspace = JetSpace(nj, int(order))
+        terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
+        Mq, Mdq = solve.mass(model, terms, y0, 1, alg=JetAlgebra(qspace), split=True)
+        alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
+    else:
+        Mq, Mdq = solve.mass(model, model.pose_terms(q0[None]), y0, 1, split=True)
+        alphas = [()]
+    zeros = (0,) * nd
+    emb = np.array([space.index[a + zeros] for a in alphas])
+    shape = (space.ncoef,) + Mq.shape[1:]
+    M, K = np.zeros(shape), np.zeros(shape)
+    M[emb] = Mq
+    K[0, : model.nx, : model.nx] = np.eye(model.nx)
+    for j in range(model.ny):
+        M[emb] += y0[j] * Mdq[j]
+        if j in design_idx:
+            k = design_idx.index(j)
+            unit = tuple(int(i == k) for i in range(nd))
+            low = [i for i, a in enumerate(alphas) if sum(a) < order]
+            shifted = np.array([space.index[alphas[i] + unit] for i in low], dtype=int)
+            M[shifted] += Mdq[j][low]
+    return space, M, K, joint_idx, design_idx
+
+
+def expansion_eigenpairs(model: FlexibleModel, M0: np.ndarray):
+    """All eigenpairs of the solver-coordinate pencil ``(blkdiag(I, 0), M0)`` at one pose.
+
+    The ``nv`` rigid modes come first (λ = 0, shapes ``[0; Lq⁻ᵀ]``), then the elastic ones
+    from the inverse form (:func:`pinflex.erls.solve.eigvecs`); all mass-normalised.
+
+    Returns:
+        ``(w, V)``: eigenvalues ascending (ndof,) and shapes (ndof, ndof).
+    """
+    import scipy.linalg
+
+    nx, nv = model.nx, model.nv
+    lam, shapes_w, shapes_x = solve.eigvecs(model, M0)
+    if shapes_x.shape[1]:
+        raise ConfigurationError(
+            f"the highest {shapes_x.shape[1]} modes at the expansion point are not resolved in "
+            "solver coordinates; use fewer elements"
+        )
+    V = np.zeros((nx + nv, nx + nv))
+    if nv:
+        Lq = np.linalg.cholesky(M0[nx:, nx:])
+        V[nx:, :nv] = scipy.linalg.solve_triangular(Lq, np.eye(nv), lower=True, trans="T")
+    V[:, nv:] = shapes_w
+    return np.concatenate([np.zeros(nv), lam]), V
