@@ -74,10 +74,12 @@ def test_references_and_values_equal_literal_numbers():
     """A file with {refs} equals the same file with the numbers written in."""
     ref = FlexibleModel(parse(TUBES), planar=True)
     lit = FlexibleModel(parse(_literal(0.04, 0.003, 0.03, 0.2)), planar=True)
-    np.testing.assert_allclose(ref.frequencies(Q0), lit.frequencies(Q0), rtol=1e-13)
+    # the literal file has no design parameters, so it is solved in relative coordinates
+    # (pinflex.erls.solve) and the referencing one in nodal coordinates: round-off differs
+    np.testing.assert_allclose(ref.frequencies(Q0), lit.frequencies(Q0), rtol=1e-11)
     moved = FlexibleModel(parse(TUBES), planar=True, values={"d1": 0.05, "mp": 0.4})
     lit2 = FlexibleModel(parse(_literal(0.05, 0.003, 0.03, 0.4)), planar=True)
-    np.testing.assert_allclose(moved.frequencies(Q0), lit2.frequencies(Q0), rtol=1e-13)
+    np.testing.assert_allclose(moved.frequencies(Q0), lit2.frequencies(Q0), rtol=1e-11)
     assert moved.design_names == ("d1", "t1", "d2", "mp")
     assert [d.kind for d in moved.design] == ["parameter"] * 4
     np.testing.assert_allclose(moved.y0, [0.05, 0.003, 0.03, 0.4])
