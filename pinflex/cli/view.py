@@ -67,8 +67,13 @@ def cmd_view(args: argparse.Namespace) -> int:
         from pinflex.trajectory import Trajectory
 
         traj = Trajectory.from_csv(args.trajectory)
-        preview = trajectory_preview(model, traj.times_s, trajectory_for(model, traj),
-                                     mode=args.mode, viewer=vis)
+        from pinflex.visualization.modes_page import add_grid
+        from pinflex.visualization.robot import pose_state, scene_points
+
+        Q = trajectory_for(model, traj)
+        preview = trajectory_preview(model, traj.times_s, Q, mode=args.mode, viewer=vis)
+        add_grid(preview.viewer, np.vstack([scene_points(pose_state(model, qk, 1))
+                                            for qk in Q]))
         caption = (f"{model.description.name}: {traj.n_samples} samples over "
                    f"{traj.duration_s:.3g} s, mode {args.mode} from "
                    f"{preview.info['low_hz']:.2f} to {preview.info['high_hz']:.2f} Hz")

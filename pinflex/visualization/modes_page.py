@@ -33,7 +33,7 @@ from pinflex.visualization.robot import (
     pose_state,
     scene_points,
 )
-from pinflex.visualization.scene import REPETITIONS, SceneWriter, describe_window
+from pinflex.visualization.scene import REPETITIONS, ROOT, SceneWriter, describe_window
 
 GRID_COLOUR = 0xC8C8C8
 
@@ -94,8 +94,11 @@ def nice_spacing(size_m: float) -> float:
     return float(10.0 * power)  # pragma: no cover
 
 
-def add_grid(writer: SceneWriter, points_m: np.ndarray) -> dict:
+def add_grid(writer, points_m: np.ndarray) -> dict:
     """A floor grid under the scene: lines in the x–y plane at the lowest point.
+
+    ``writer`` is a :class:`SceneWriter` or a ``meshcat.Visualizer`` holding a preview (the
+    grid goes under its ``pinflex`` node, in world coordinates).
 
     Returns:
         ``spacing_m`` (a round number), ``z_m`` (height of the grid) and ``extent_m``
@@ -116,7 +119,8 @@ def add_grid(writer: SceneWriter, points_m: np.ndarray) -> dict:
     for y in np.arange(y0, y1 + 0.5 * h, h):
         segs += [[x0, y, z], [x1, y, z]]
     P = np.array(segs, dtype=np.float32).T
-    writer.root["grid"].set_object(mg.LineSegments(mg.PointsGeometry(P),
+    root = writer.root if isinstance(writer, SceneWriter) else writer[ROOT]
+    root["grid"].set_object(mg.LineSegments(mg.PointsGeometry(P),
                                                    mg.LineBasicMaterial(color=GRID_COLOUR)))
     return {"spacing_m": h, "z_m": z, "extent_m": [[float(x0), float(x1)], [float(y0), float(y1)]]}
 
