@@ -33,7 +33,7 @@ def test_draws_into_a_users_pinocchio_meshcat_visualizer(two_link_planar):
     window = viz.viewer.window
     assert window.tree["meshcat"]["pinflex"]["grid"].object is not None
     f = two_link_planar.frequencies(Q0, n_modes=3)
-    np.testing.assert_allclose(page.freq_hz, f, rtol=1e-12)
+    np.testing.assert_allclose(page.freq_hz, f, rtol=1e-10)  # two eigensolvers
     assert page.modes == (1, 2, 3) and f"mode 2 at {f[1]:.2f} Hz" in page.captions[1]
     first = window.animation
     page.select(3)
