@@ -173,3 +173,72 @@ def test_elastica_refuses_unstable_straight_column():
     beam, ei, _ = _uniform_reference_hz()
     with pytest.raises(TruthNotConverged):
         elastica_tip(beam, np.array([-4.0 * ei, 0.0]))
+
+
+def _tapered(width_tip, thickness_tip):
+    """A 1 m steel cantilever whose width and/or thickness fall linearly to the tip values."""
+    from pinflex.prbdm.beams import Planform
+
+    return Planform(np.array([0.0, 1.0]), np.array([0.15, 0.5 * width_tip]), 0.04,
+                    thickness_profile_m=np.array([0.04, thickness_tip]))
+
+
+def _omega(beam, freq_hz):
+    """Frequency parameter omega L^2 sqrt(rho A_root / EI_root)."""
+    ei0 = 205e9 * float(beam.area_moment_m4(0.0))
+    return 2 * np.pi * np.asarray(freq_hz) * np.sqrt(7850.0 * float(beam.area_m2(0.0)) / ei0)
+
+
+def test_depth_taper_to_zero_is_kirchhoffs_wedge():
+    """A wedge (depth linear to zero, constant width) has Kirchhoff's frequencies.
+
+    With xi = 1 - x/L the modes solve (xi^3 w'')'' = Omega^2 xi w; the solutions regular at the
+    sharp tip are z^-1 J1(z), z^-1 I1(z) with z = 2 sqrt(Omega xi), and the clamp gives
+    J1(z) I2(z) + I1(z) J2(z) = 0 (Omega_1 = 5.3151).
+    """
+    from scipy.special import iv, jv
+
+    def clamp(z):
+        return jv(1, z) * iv(2, z) + iv(1, z) * jv(2, z)
+
+    grid = np.arange(0.5, 20.0, 0.25)
+    roots = [brentq(clamp, a, a + 0.25, xtol=1e-15) for a in grid if clamp(a) * clamp(a + 0.25) < 0]
+    exact = np.array(roots[:3]) ** 2 / 4.0
+    assert exact[0] == pytest.approx(5.3151, abs=1e-4)
+    beam = _tapered(0.3, 0.0)
+    np.testing.assert_allclose(_omega(beam, beam_frequencies(beam, 3).freq_hz), exact, rtol=1e-8)
+
+
+def test_width_taper_to_zero_matches_power_series():
+    """A pointed planform (width linear to zero, constant depth) against its power series.
+
+    (xi w'')'' = Omega^2 xi w has the solutions regular at the free tip
+    w = sum a_k xi^k with a_2 = a_3 = 0 and a_{j+3} (j+3)(j+2)^2(j+1) = Omega^2 a_{j-1};
+    the clamp at xi = 1 is a 2 x 2 determinant in (a_0, a_1).
+    """
+    def clamp(omega):
+        def series(a0, a1):
+            a = np.zeros(80)
+            a[0], a[1] = a0, a1
+            for j in range(1, 77):
+                a[j + 3] = omega**2 * a[j - 1] / ((j + 3) * (j + 2) ** 2 * (j + 1))
+            k = np.arange(80)
+            return a.sum(), (k * a).sum()
+
+        (w0, d0), (w1, d1) = series(1.0, 0.0), series(0.0, 1.0)
+        return w0 * d1 - w1 * d0
+
+    grid = np.arange(1.0, 80.0, 0.5)
+    exact = np.array([brentq(clamp, a, a + 0.5, xtol=1e-14) for a in grid
+                      if clamp(a) * clamp(a + 0.5) < 0][:3])
+    beam = _tapered(0.0, 0.04)
+    np.testing.assert_allclose(_omega(beam, beam_frequencies(beam, 3).freq_hz), exact, rtol=1e-8)
+
+
+def test_chains_refuse_tapered_thickness_and_zero_tip_width():
+    """Beams only the reference solutions support are refused by the chain, with a reason."""
+    from pinflex.prbdm.beams import chain_segments
+
+    for beam in (_tapered(0.3, 0.02), _tapered(0.0, 0.04)):
+        with pytest.raises(InvalidBeam, match="reference solutions only"):
+            chain_segments(beam, np.array([0.0, 0.5, 1.0]))

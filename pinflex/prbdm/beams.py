@@ -70,6 +70,13 @@ class Planform:
         thickness_m: Uniform thickness t along Z [m].
         material: Beam material.
         name: Label used in reports.
+        thickness_profile_m: Optional thickness at each vertex, linear in between (a depth
+            taper) [m]; ``thickness_m`` is then the root thickness. None: uniform.
+
+    Tapers to zero: the tip vertex (only) may have zero half-width or zero thickness (a wedge
+    or a pointed planform). The reference solutions of :mod:`pinflex.prbdm.truth` accept
+    such beams and depth tapers; the nR chains (:func:`chain_segments`) need a uniform
+    thickness and a positive width and refuse the rest.
     """
 
     x_m: np.ndarray
@@ -77,6 +84,7 @@ class Planform:
     thickness_m: float
     material: Material = STEEL
     name: str = ""
+    thickness_profile_m: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         x = np.asarray(self.x_m, dtype=float)
@@ -84,6 +92,30 @@ class Planform:
         _validate_planform(x, y, self.thickness_m)
         object.__setattr__(self, "x_m", _readonly(x))
         object.__setattr__(self, "half_width_m", _readonly(y))
+        if self.thickness_profile_m is not None:
+            t = np.asarray(self.thickness_profile_m, dtype=float)
+            if t.shape != x.shape or not np.all(np.isfinite(t)) or np.any(t[:-1] <= 0.0) \
+                    or t[-1] < 0.0:
+                raise InvalidBeam(
+                    "thickness_profile_m needs one finite thickness per vertex, positive "
+                    f"except possibly zero at the tip; got {np.round(t, 6).tolist()}")
+            if abs(t[0] - self.thickness_m) > 1e-12 * self.thickness_m:
+                raise InvalidBeam(f"thickness_m = {self.thickness_m!r} must equal the root "
+                                  f"thickness of the profile, {t[0]!r}")
+            object.__setattr__(self, "thickness_profile_m", _readonly(t))
+
+    @property
+    def uniform_thickness(self) -> bool:
+        """Whether the thickness is the same everywhere."""
+        t = self.thickness_profile_m
+        return t is None or bool(np.all(t == t[0]))
+
+    def _require_chain_ready(self) -> None:
+        if not self.uniform_thickness or self.half_width_m[-1] <= 0.0:
+            raise InvalidBeam(
+                "nR chains need a planform of uniform thickness and positive width; this beam "
+                "(a depth taper or a zero tip width) is supported by the reference solutions "
+                "only")
 
     @cached_property
     def _cumulative_integrals(self) -> np.ndarray:
@@ -116,16 +148,22 @@ class Planform:
         return 2.0 * np.interp(s, self.x_m, self.half_width_m)
 
     def thickness_at(self, s: np.ndarray | float) -> np.ndarray:
-        """Thickness t(s) at abscissae s [m] (uniform here)."""
-        return np.full(np.shape(s), float(self.thickness_m))
+        """Thickness t(s) at abscissae s [m]."""
+        if self.thickness_profile_m is None:
+            return np.full(np.shape(s), float(self.thickness_m))
+        return np.interp(s, self.x_m, self.thickness_profile_m)
 
     def area_m2(self, s: np.ndarray | float) -> np.ndarray:
-        """Cross-section area A(s) = w(s) t [m^2]."""
-        return self.width_m(s) * self.thickness_m
+        """Cross-section area A(s) = w(s) t(s) [m^2]."""
+        if self.thickness_profile_m is None:
+            return self.width_m(s) * self.thickness_m
+        return self.width_m(s) * self.thickness_at(s)
 
     def area_moment_m4(self, s: np.ndarray | float) -> np.ndarray:
-        """Out-of-plane bending second moment of area I(s) = w(s) t^3 / 12 [m^4]."""
-        return self.width_m(s) * self.thickness_m**3 / 12.0
+        """Out-of-plane bending second moment of area I(s) = w(s) t(s)^3 / 12 [m^4]."""
+        if self.thickness_profile_m is None:
+            return self.width_m(s) * self.thickness_m**3 / 12.0
+        return self.width_m(s) * self.thickness_at(s) ** 3 / 12.0
 
     def outline_m(self) -> np.ndarray:
         """Closed planform polygon, shape (2 (p + 2) + 1, 2), counter-clockwise [m]."""
@@ -154,11 +192,12 @@ def _validate_planform(x: np.ndarray, y: np.ndarray, thickness_m: float) -> None
             f"x[{bad + 1}] = {x[bad + 1]:g} m (a zero-length beam or section); "
             "remove or merge repeated vertices"
         )
-    if np.any(y <= 0.0):
+    if np.any(y[:-1] <= 0.0) or y[-1] < 0.0:
         bad = int(np.argmin(y))
         raise InvalidBeam(
-            f"half-widths must be positive; half_width_m[{bad}] = {y[bad]:g} m; a zero width "
-            "is a hinge that a beam model cannot represent"
+            f"half-widths must be positive (zero is allowed at the tip only); "
+            f"half_width_m[{bad}] = {y[bad]:g} m; a zero width inside the beam is a hinge that "
+            "a beam model cannot represent"
         )
     if not np.isfinite(thickness_m) or thickness_m <= 0.0:
         raise InvalidBeam(f"thickness_m = {thickness_m!r} must be a finite positive number [m]")
@@ -305,6 +344,7 @@ def chain_segments(planform: Planform, bounds_m: np.ndarray) -> list[SegmentProp
     Raises:
         InvalidBeam: If the boundaries are not increasing or leave the beam.
     """
+    planform._require_chain_ready()
     bounds = np.asarray(bounds_m, dtype=float)
     length = planform.length_m
     if bounds.ndim != 1 or bounds.size < 2 or np.any(np.diff(bounds) <= 0.0) \

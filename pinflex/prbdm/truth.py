@@ -31,8 +31,9 @@ from scipy.integrate import solve_ivp
 from ..exceptions import InvalidBeam, TruthNotConverged
 from .beams import Planform, equivalent_bending_stiffness
 
-_GAUSS2 = np.polynomial.legendre.leggauss(2)
-_GAUSS4 = np.polynomial.legendre.leggauss(4)
+# Exact for EI of degree <= 3 (a linear depth taper: I ~ t^3) and rho A of degree <= 2.
+_GAUSS2 = np.polynomial.legendre.leggauss(3)
+_GAUSS4 = np.polynomial.legendre.leggauss(5)
 
 
 def _hermite_shapes(xi: np.ndarray, h: np.ndarray):
@@ -80,6 +81,8 @@ def beam_mesh(planform: Planform, max_element_m: float, max_stiffness_ratio: flo
         raise InvalidBeam(f"refine = {refine!r} must be a positive integer")
     x1, x2 = planform.x_m[:-1], planform.x_m[1:]
     i1, i2 = planform.area_moment_m4(x1), planform.area_moment_m4(x2)
+    # A taper to zero at the tip: grade towards a floor of EI (the elements stay exact).
+    i2 = np.maximum(i2, 1e-4 * i1)
     log_r = np.log(max_stiffness_ratio)
 
     def g(x: np.ndarray, piece: np.ndarray) -> np.ndarray:
@@ -106,8 +109,8 @@ def beam_mesh(planform: Planform, max_element_m: float, max_stiffness_ratio: flo
 def element_matrices(planform: Planform, nodes_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Hermite element stiffness and consistent mass matrices, vectorised over elements.
 
-    Exact for a width linear inside each element (2-point Gauss for stiffness, 4-point for
-    mass). Element dofs are (w1 [m], w1' [rad], w2 [m], w2' [rad]).
+    Exact for a width and a thickness linear inside each element (3-point Gauss for stiffness,
+    5-point for mass). Element dofs are (w1 [m], w1' [rad], w2 [m], w2' [rad]).
 
     Args:
         planform: The beam (its vertices must be nodes of the mesh).
