@@ -101,6 +101,29 @@ def _positive(name: str, value: float) -> None:
         raise InvalidBeamProperty(f"{name} = {value!r} must be a positive finite number [m]")
 
 
+def hermite_shapes(xi: np.ndarray, length_m) -> tuple[np.ndarray, np.ndarray]:
+    """Cubic Hermite shape functions of one bending plane and their second derivatives.
+
+    Element dofs are ``(w_a, w'_a, w_b, w'_b)`` with ``w' = dw/dx``; ``xi`` and ``length_m``
+    broadcast against each other (e.g. ``xi`` of shape (1, k) with lengths (n, 1) for ``n``
+    elements of different lengths).
+
+    Args:
+        xi: Points along the element, ``x / L`` in [0, 1].
+        length_m: Element length(s) L [m].
+
+    Returns:
+        ``(N, B)``, each of shape ``broadcast(xi, length_m).shape + (4,)``: the values [1, m]
+        and the second derivatives ``d²N/dx²`` [1/m², 1/m].
+    """
+    xi, h = np.broadcast_arrays(np.asarray(xi, dtype=float), np.asarray(length_m, dtype=float))
+    n = np.stack([1.0 - 3.0 * xi**2 + 2.0 * xi**3, h * (xi - 2.0 * xi**2 + xi**3),
+                  3.0 * xi**2 - 2.0 * xi**3, h * (-(xi**2) + xi**3)], axis=-1)
+    b = np.stack([(-6.0 + 12.0 * xi) / h**2, (-4.0 + 6.0 * xi) / h,
+                  (6.0 - 12.0 * xi) / h**2, (-2.0 + 6.0 * xi) / h], axis=-1)
+    return n, b
+
+
 def shape_matrix(length_m: float, xi: np.ndarray) -> np.ndarray:
     """Interpolation of the 12 element dofs to the displacement and rotation on the axis.
 
@@ -114,10 +137,7 @@ def shape_matrix(length_m: float, xi: np.ndarray) -> np.ndarray:
     xi = np.atleast_1d(np.asarray(xi, dtype=float))
     L = float(length_m)
     n1, n2 = 1.0 - xi, xi
-    h1 = 1.0 - 3.0 * xi**2 + 2.0 * xi**3
-    h2 = L * (xi - 2.0 * xi**2 + xi**3)
-    h3 = 3.0 * xi**2 - 2.0 * xi**3
-    h4 = L * (-(xi**2) + xi**3)
+    h1, h2, h3, h4 = np.moveaxis(hermite_shapes(xi, L)[0], -1, 0)
     d1 = (-6.0 * xi + 6.0 * xi**2) / L
     d2 = 1.0 - 4.0 * xi + 3.0 * xi**2
     d3 = (6.0 * xi - 6.0 * xi**2) / L
@@ -140,10 +160,7 @@ def _strain_matrix(length_m: float, xi: np.ndarray) -> np.ndarray:
     B = np.zeros((xi.size, 4, 12))
     B[:, 0, 0], B[:, 0, 6] = -1.0 / L, 1.0 / L  # axial strain du/dx
     B[:, 1, 3], B[:, 1, 9] = -1.0 / L, 1.0 / L  # twist rate dθx/dx
-    c1 = (-6.0 + 12.0 * xi) / L**2
-    c2 = (-4.0 + 6.0 * xi) / L
-    c3 = (6.0 - 12.0 * xi) / L**2
-    c4 = (-2.0 + 6.0 * xi) / L
+    c1, c2, c3, c4 = np.moveaxis(hermite_shapes(xi, L)[1], -1, 0)
     # curvature about z: d2v/dx2 ; curvature about y: d2w/dx2 (sign irrelevant in energy)
     B[:, 3, 1], B[:, 3, 5], B[:, 3, 7], B[:, 3, 11] = c1, c2, c3, c4
     B[:, 2, 2], B[:, 2, 4], B[:, 2, 8], B[:, 2, 10] = c1, -c2, c3, -c4

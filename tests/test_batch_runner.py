@@ -256,7 +256,7 @@ def test_progress_bar_reports_rate_and_eta():
     """The bar shows done/total, percent, a rate and an ETA that reaches zero at the end."""
     import io
 
-    from pinflex.batch.runner import ProgressBar
+    from pinflex.progress import ProgressBar
 
     stream = io.StringIO()
     bar = ProgressBar(4, "beams", stream=stream, log_interval_s=0.0)

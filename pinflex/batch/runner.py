@@ -22,18 +22,17 @@ from __future__ import annotations
 import importlib
 import logging
 import os
-import sys
 import time
 import uuid
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TextIO
 
 import numpy as np
 
 from pinflex.batch.store import Key, ResultStore
 from pinflex.exceptions import BatchError, MissingDependency
+from pinflex.progress import ProgressBar
 
 
 @dataclass(frozen=True)
@@ -102,71 +101,6 @@ class BatchSummary:
             lines.append("mean compute per " + unit + ": " + ", ".join(
                 f"{k.removesuffix('_s')} {v:.3g} s" for k, v in self.stage_s.items()))
         return "\n".join(lines)
-
-
-class ProgressBar:
-    """Text progress bar with rate and ETA on a stream (stderr by default).
-
-    On a terminal the bar is redrawn in place at most ten times a second; elsewhere (a log
-    file, a pipe) a line is printed at most every ``log_interval_s`` and at the end.
-    """
-
-    def __init__(self, total: int, label: str, enabled: bool = True,
-                 stream: TextIO | None = None, width: int = 24, log_interval_s: float = 10.0):
-        self.total, self.label, self.enabled, self.width = total, label, enabled, width
-        self.stream = stream or sys.stderr
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.log_interval_s = log_interval_s
-        self.done = self.failed = 0
-        self.start = time.perf_counter()
-        self._last = -np.inf
-
-    def line(self) -> str:
-        """The current bar as text."""
-        elapsed = time.perf_counter() - self.start
-        rate = self.done / elapsed if elapsed > 0 else 0.0
-        frac = self.done / self.total if self.total else 1.0
-        filled = int(round(self.width * frac))
-        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
-        fails = f", {self.failed} failed" if self.failed else ""
-        return (f"{self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
-                f"{self.done}/{self.total} {100 * frac:3.0f}% {rate:.3g}/s "
-                f"ETA {_duration(eta)} elapsed {_duration(elapsed)}{fails}")
-
-    def update(self, done: int = 1, failed: int = 0) -> None:
-        """Count finished tasks (``failed`` of them failed) and redraw if due."""
-        self.done += done
-        self.failed += failed
-        self._draw(final=self.done >= self.total)
-
-    def close(self) -> None:
-        """Draw the final state."""
-        self._draw(final=True)
-
-    def _draw(self, final: bool) -> None:
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        interval = 0.1 if self.tty else self.log_interval_s
-        if not final and now - self._last < interval:
-            return
-        self._last = now
-        if self.tty:
-            self.stream.write("\r" + self.line() + ("\n" if final else ""))
-        else:
-            self.stream.write(self.line() + "\n")
-        self.stream.flush()
-        if final:
-            self.enabled = False  # draw the final line once
-
-
-def _duration(seconds: float) -> str:
-    if not np.isfinite(seconds):
-        return "--:--"
-    seconds = int(round(seconds))
-    h, rest = divmod(seconds, 3600)
-    m, s = divmod(rest, 60)
-    return f"{h}:{m:02d}:{s:02d}" if h else f"{m:02d}:{s:02d}"
 
 
 def connect(scheduler: str | None = None, workers: int | None = None):

@@ -22,13 +22,13 @@ simplex equality (15b) is a residual on the fractions' sum, to which the losses 
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from ..exceptions import InvalidChain, MappingFailed
+from ..progress import ProgressBar
 from .beams import Planform
 from .chain import PrbdmChain, build_chain
 from .options import OBJECTIVES
@@ -150,26 +150,6 @@ def _nan_to_none(value):
     if isinstance(value, float) and not np.isfinite(value):
         return None
     return value
-
-
-class ProgressBar:
-    """Minimal text progress bar on stderr (silent unless enabled)."""
-
-    def __init__(self, total: int, label: str, enabled: bool = True, width: int = 28):
-        self.total, self.label, self.enabled, self.width = max(total, 1), label, enabled, width
-        self.count = 0
-
-    def update(self, best: float) -> None:
-        """Advance by one and show the best loss so far."""
-        self.count += 1
-        if not self.enabled:
-            return
-        filled = int(self.width * self.count / self.total)
-        sys.stderr.write(f"\r{self.label} [{'#' * filled}{'.' * (self.width - filled)}] "
-                         f"{self.count}/{self.total} best {best:.3e}")
-        if self.count >= self.total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
 
 
 def _weights(problem: MappingProblem, kind: str, weight: float | None) -> tuple[float, float]:
@@ -348,11 +328,11 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
             x = _local(problem, kind, x0, jacobian=jacobian)
             ev = final_evaluation(problem, x, jacobian)
         except (InvalidChain, np.linalg.LinAlgError, ValueError):
-            bar.update(min((_score(e, kind, problem.metrics) for _, e in found), default=np.inf))
+            bar.update(best=min((_score(e, kind, problem.metrics) for _, e in found), default=np.inf))
             continue
         if np.isfinite(_score(ev, kind, problem.metrics)):
             found.append((x, ev))
-        bar.update(min((_score(e, kind, problem.metrics) for _, e in found), default=np.inf))
+        bar.update(best=min((_score(e, kind, problem.metrics) for _, e in found), default=np.inf))
     if not found:
         raise MappingFailed(f"all {len(points)} starts of the {kind} mapping failed for "
                             f"{problem.n_joints}R; try more starts or another seed")
@@ -391,7 +371,7 @@ def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.
         if best is not None:
             points.append((best[1], best[2]))
             previous = best[1]
-        bar.update(min(p[1].combined_error for p in points))
+        bar.update(best=min(p[1].combined_error for p in points))
 
     def dominated(p, q) -> bool:
         return (q[1].eigen_error <= p[1].eigen_error and q[1].deflection_error

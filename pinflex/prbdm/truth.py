@@ -28,25 +28,13 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.integrate import solve_ivp
 
+from ..beam import hermite_shapes
 from ..exceptions import InvalidBeam, TruthNotConverged
 from .beams import Planform, equivalent_bending_stiffness
 
 # Exact for EI of degree <= 3 (a linear depth taper: I ~ t^3) and rho A of degree <= 2.
 _GAUSS2 = np.polynomial.legendre.leggauss(3)
 _GAUSS4 = np.polynomial.legendre.leggauss(5)
-
-
-def _hermite_shapes(xi: np.ndarray, h: np.ndarray):
-    """Hermite cubic shape functions and second derivatives at xi in [0, 1].
-
-    Returns (N, B) with shapes (..., 4): N the values, B = d^2N/dx^2 [1/m^2].
-    """
-    xi, h = np.broadcast_arrays(np.asarray(xi, dtype=float), h)
-    n = np.stack([1 - 3 * xi**2 + 2 * xi**3, h * (xi - 2 * xi**2 + xi**3),
-                  3 * xi**2 - 2 * xi**3, h * (-(xi**2) + xi**3)], axis=-1)
-    b = np.stack([(-6 + 12 * xi) / h**2, (-4 + 6 * xi) / h,
-                  (6 - 12 * xi) / h**2, (-2 + 6 * xi) / h], axis=-1)
-    return n, b
 
 
 def beam_mesh(planform: Planform, max_element_m: float, max_stiffness_ratio: float = 1.5,
@@ -125,10 +113,10 @@ def element_matrices(planform: Planform, nodes_m: np.ndarray) -> tuple[np.ndarra
     rho = planform.material.density_kg_m3
     xi2 = 0.5 * (_GAUSS2[0] + 1.0)
     xi4 = 0.5 * (_GAUSS4[0] + 1.0)
-    _, b = _hermite_shapes(xi2[None, :], h)
+    _, b = hermite_shapes(xi2[None, :], h)
     ei = e * planform.area_moment_m4(x1[:, None] + h * xi2)
     k_el = np.einsum("eq,eqi,eqj->eij", 0.5 * _GAUSS2[1] * h * ei, b, b)
-    n, _ = _hermite_shapes(xi4[None, :], h)
+    n, _ = hermite_shapes(xi4[None, :], h)
     rho_a = rho * planform.area_m2(x1[:, None] + h * xi4)
     m_el = np.einsum("eq,eqi,eqj->eij", 0.5 * _GAUSS4[1] * h * rho_a, n, n)
     return k_el, m_el
