@@ -85,7 +85,7 @@ def test_drawn_beam_segments_pass_through_the_displaced_nodes(two_link_planar):
     scale = p.info["scale"]
     tracks = recorded_tracks(p)
     n_st = 8
-    for link, plan in two_link_planar._flex.items():
+    for link, plan in two_link_planar.plan.beams.items():
         n_seg = plan.spec.elements * n_st
         for j in range(frames + 1):
             s = scale * np.sin(2 * np.pi * j / frames)

@@ -48,6 +48,7 @@ import pinocchio as pin
 
 from pinflex import beam
 from pinflex.erls.plan import attachment
+from pinflex.erls.terms import offset_block
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
 
@@ -108,12 +109,12 @@ class ErlsDynamics:
         self._pdata = model.model.createData()
         self._points, self._rotors = _build_carriers(model, self.y)
         self._links = sorted({c.link for c in self._points} | {c.link for c in self._rotors},
-                             key=model._order.index)
+                             key=model.plan.links.index)
         #: whether the joint offsets A(q) change with the pose (a joint on an element-0 point
         #: of a link whose root itself moves elastically)
         self.offsets_vary = any(
-            j.attach.lin is not None and j.parent != model._order[0] and j.user_col >= 0
-            for j in model._joints)
+            j.attach.lin is not None and j.parent != model.plan.root and j.user_col >= 0
+            for j in model.plan.joints)
         conds = getattr(model, "joint_conditions", ())
         locked = [c.name for c in conds if c.kind == "locked"]
         if locked:
@@ -137,14 +138,14 @@ class ErlsDynamics:
         J, R = {}, {}
         Jd = {link: np.zeros((self.nv, 6, self.nv)) for link in self._links}
         for link in self._links:
-            fid = model._frame_id[link]
+            fid = model.plan.frame_ids[link]
             J[link] = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ Cm
             R[link] = pd.oMf[fid].rotation.copy()
         for k in range(self.nv):
             pin.computeJointJacobiansTimeVariation(pm, pd, qp, Cm[:, k].copy())
             for link in self._links:
                 Jd[link][k] = pin.getFrameJacobianTimeVariation(
-                    pm, pd, model._frame_id[link], pin.LOCAL) @ Cm
+                    pm, pd, model.plan.frame_ids[link], pin.LOCAL) @ Cm
         e, ed = root_twists(model, Cm @ q, Cm)
         return J, Jd, R, e, ed
 
@@ -222,10 +223,11 @@ class ErlsDynamics:
             G = self.model.relative_motion_rows(self._q_last)
             for col, k in self._springs:
                 K += k * np.outer(G[col], G[col])
-        for link, a in self.model._assembly_arrays.items():
+        for link, bp in self.model.plan.beams.items():
+            sel, root, _, _, stiffness = bp.kept
             el = e.get(link)
-            bx = a["sel"] if el is None else a["sel"] + a["root"] @ el
-            K[: self.nx, : self.nx] += bx.T @ a["stiffness"] @ bx
+            bx = sel if el is None else sel + root @ el
+            K[: self.nx, : self.nx] += bx.T @ stiffness @ bx
         return K
 
     def joint_offsets(self, q):
@@ -243,7 +245,7 @@ class ErlsDynamics:
         nv, nx = self.nv, self.nx
         Ap = np.zeros((nv, nx))
         Adp = np.zeros((nv, nv, nx))
-        for j in model._joints:
+        for j in model.plan.joints:
             if j.user_col < 0 or j.kind not in ("revolute", "prismatic"):
                 continue
             att = j.attach
@@ -270,9 +272,9 @@ class ErlsDynamics:
         model = self.model
         model.description.require_link(link)
         xyz = np.asarray(xyz, dtype=float)
-        att = attachment(model, link, xyz)
+        att = attachment(model.plan.beams, link, xyz)
         pm, pd = model.model, model.model.createData()
-        fid = model._frame_id[link]
+        fid = model.plan.frame_ids[link]
         Xp = translate_twist(xyz)
 
         def at(q):
@@ -294,17 +296,17 @@ class ErlsDynamics:
 def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
     """Elastic twists of the link roots ``e_L`` (6, nx) in link axes and their rates.
 
-    Follows the unique-ERLS rule of the assembly (``FlexibleModel._root_twists``) at one pose:
+    Follows the unique-ERLS rule of the assembly (``FlexibleModel.root_twists``) at one pose:
     a child root copies its parent attachment's elastic twist rotated into the child axes,
     minus the joint's motion subspace. The rates ``ė_L`` (k, 6, nx) come from the joints
     turning (or sliding) with the Pinocchio velocities in the columns of ``vrel`` (nv, k).
     ``None`` where a root has no elastic motion.
     """
-    tw: dict = {model._order[0]: None}
-    rate: dict = {model._order[0]: None}
+    tw: dict = {model.plan.root: None}
+    rate: dict = {model.plan.root: None}
     vrel = np.asarray(vrel, dtype=float).reshape(model.nv, -1)
     nk = vrel.shape[1]
-    for j in model._joints:
+    for j in model.plan.joints:
         att = j.attach
         ep, edp = tw[j.parent], rate[j.parent]
         if ep is None or att.lin is None:
@@ -325,8 +327,8 @@ def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
             childd = dRt6 @ tau + (zero if taud is None else Rt6 @ taud)
         elif j.kind == "prismatic":
             s = j.R_o @ j.axis
-            ob = _offset_block(s * qrel[j.user_col])
-            dob = np.stack([_offset_block(s * v) for v in vrel[j.user_col]])
+            ob = offset_block(s * qrel[j.user_col])
+            dob = np.stack([offset_block(s * v) for v in vrel[j.user_col]])
             Rt6 = rotate_twist(j.R_o.T)
             child = Rt6 @ (tau + ob @ tau)
             childd = Rt6 @ (dob @ tau + (zero if taud is None else taud + ob @ taud))
@@ -340,13 +342,6 @@ def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
 
 
 # ---------------------------------------------------------------------- set-up
-def _offset_block(p: np.ndarray) -> np.ndarray:
-    """``translate_twist(p) − I``: the part of a shift by ``p`` that is linear in ``p``."""
-    out = np.zeros((6, 6))
-    out[:3, 3:] = -skew(p)
-    return out
-
-
 def _xmap(c: np.ndarray) -> np.ndarray:
     out = np.zeros(c.shape[:-1] + (3, 6))
     out[..., :, :3] = np.eye(3)
@@ -360,7 +355,7 @@ def _build_carriers(model, y: np.ndarray):
     design_index = {d.name: i for i, d in enumerate(model.design)}
     points: list[_Carriers] = []
     rotors: list[_Carriers] = []
-    for link, plan in model._flex.items():
+    for link, plan in model.plan.beams.items():
         spec = plan.spec
         n = spec.elements
         le = spec.length_m / n
@@ -388,15 +383,16 @@ def _build_carriers(model, y: np.ndarray):
             rx[:, :, 3:] = np.eye(3)
             rotors.append(_Carriers(link, c, rx, np.array(Crs), np.array(Drs),
                                     np.array(Irs), -np.ones(len(Irs), dtype=int)))
-    for link in model._inertias:
+    for link in model.plan.inertias:
         ine = desc.inertias[link]
         c, m = _equivalent_points(ine.mass, ine.com, ine.inertia)
         X = _xmap(c)
         points.append(_Carriers(link, c, X, np.zeros((c.shape[0], 3, nx)), X, m,
                                 -np.ones(m.size, dtype=int)))
-    for name, link, xyz, att in model._point_masses:
+    for pm in model.plan.point_masses:
+        name, link, xyz, att = pm.name, pm.link, pm.xyz, pm.attach
         d = design_index.get(name, -1)
-        mass = y[d] if d >= 0 else model._pm_values[name]
+        mass = y[d] if d >= 0 else model.point_mass_values[name]
         C = np.zeros((1, 3, nx)) if att.const is None else att.const[None, :3]
         D = None if att.lin is None else att.lin[None, :3]
         points.append(_Carriers(link, np.asarray(xyz, float)[None], _xmap(np.asarray(

@@ -1,17 +1,36 @@
 """ERLS (equivalent rigid-link system) model of a flexible-link arm on Pinocchio.
 
 :class:`FlexibleModel` (``model.py``) loads an annotated URDF and assembles ``M(q, y)`` and
-``K(q, y)``; ``plan.py`` sets up the elastic layout and attachments, ``terms.py`` holds the data
-the assembly runs on, and ``modal.py`` solves the modal problem.
+``K(q, y)``; ``plan.py`` builds its read-only :class:`ModelPlan` (``model.plan``: links, beams,
+joints, mass carriers, attachments), ``terms.py`` holds the data types the assembly runs on,
+and ``modal.py`` solves the modal problem.
 """
 
 from pinflex.erls.modal import ModalResult
-from pinflex.erls.model import FlexibleModel
+from pinflex.erls.model import FlexibleModel, NodePlacement
 from pinflex.erls.terms import (
     PLANAR_NODE_DOFS,
+    Attachment,
     BatchAlgebra,
+    BeamPlan,
     DesignVariable,
-    _PoseTerms,  # noqa: F401  (used by the Taylor model)
+    JointPlan,
+    ModelPlan,
+    PointMassPlan,
+    PoseTerms,
 )
 
-__all__ = ["BatchAlgebra", "DesignVariable", "FlexibleModel", "ModalResult", "PLANAR_NODE_DOFS"]
+__all__ = [
+    "PLANAR_NODE_DOFS",
+    "Attachment",
+    "BatchAlgebra",
+    "BeamPlan",
+    "DesignVariable",
+    "FlexibleModel",
+    "JointPlan",
+    "ModalResult",
+    "ModelPlan",
+    "NodePlacement",
+    "PointMassPlan",
+    "PoseTerms",
+]

@@ -52,7 +52,7 @@ def setup(model) -> None:
     design = {d.name for d in model.design if d.kind == "parameter"}
     channels: list[Channel] = []
     links = []
-    for link, plan in model._flex.items():
+    for link, plan in model.plan.beams.items():
         inputs = plan.spec.inputs
         if inputs is None or not set(inputs.parameters()) & design:
             continue
@@ -89,7 +89,7 @@ def channel_values(model, get) -> list:
             out.append(get(model._spring_refs[ch.owner]))
             continue
         if ch.owner not in props:
-            props[ch.owner] = beam_properties(model._flex[ch.owner].spec.inputs, get)
+            props[ch.owner] = beam_properties(model.plan.beams[ch.owner].spec.inputs, get)
         out.append(props[ch.owner][ch.name])
     return out
 
@@ -97,7 +97,7 @@ def channel_values(model, get) -> list:
 def check_sections(model, get) -> None:
     """Raise :class:`InvalidBeamProperty` where a design makes a section or property invalid."""
     for link in model._design_links:
-        inputs = model._flex[link].spec.inputs
+        inputs = model.plan.beams[link].spec.inputs
         p = beam_properties(inputs, get)
         limits = section_limits(inputs, get)
         p.update(limits)
@@ -132,7 +132,7 @@ def components(model, terms, alg, which=None) -> list[np.ndarray | None]:
     """
     if not model._design_channels:
         return []
-    twist = model._root_twists(terms, alg)
+    twist = model.root_twists(terms, alg)
     out: list[np.ndarray] = []
     full = []
     cache = {}
@@ -147,10 +147,10 @@ def components(model, terms, alg, which=None) -> list[np.ndarray | None]:
             full.append(_mm(alg, np.swapaxes(g, -1, -2), g))
             continue
         if ch.owner not in cache:
-            a = model._assembly_arrays[ch.owner]
+            sel, root, jac, _, _ = model.plan.beams[ch.owner].kept
             e = twist[ch.owner]
-            bx = alg.const(a["sel"]) if e is None else alg.const(a["sel"]) + a["root"] @ e
-            w = np.concatenate([bx, a["jac"] @ terms.jac[ch.owner]], axis=-1)
+            bx = alg.const(sel) if e is None else alg.const(sel) + root @ e
+            w = np.concatenate([bx, jac @ terms.jac[ch.owner]], axis=-1)
             cache[ch.owner] = (bx, w)
         bx, w = cache[ch.owner]
         nx = model.nx
@@ -235,7 +235,7 @@ def design_mass(model, y, *, order: int = 0):
 
         total = np.zeros(1)
     for link in model._design_links:
-        spec = model._flex[link].spec
+        spec = model.plan.beams[link].spec
         rhoA = beam_properties(spec.inputs, get)["rhoA"]
         total = total + (coefficients(space, rhoA) if space else float(rhoA)) * spec.length_m
     for pm in model.description.point_masses:

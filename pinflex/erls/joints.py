@@ -147,7 +147,7 @@ def setup(model, joints) -> None:
     model._elastic_cols = np.concatenate(
         [np.arange(nx), [modal_col[i] for i, c in enumerate(conds) if c.kind == "spring"]]
     ).astype(int)
-    by_col = {j.user_col: j for j in model._joints if j.user_col >= 0}
+    by_col = {j.user_col: j for j in model.plan.joints if j.user_col >= 0}
     model._spring_joints = tuple(
         (by_col[i], c.stiffness) for i, c in enumerate(conds) if c.kind == "spring"
     )
@@ -164,12 +164,12 @@ def setup(model, joints) -> None:
         model._lock_T0 = T0
         model._lock_inv = inv
         model._lock_rows = nx + np.array(locked, dtype=int)
-    model._joints_plain = not model._spring_joints and not locked
+    model.plan.joints_plain = not model._spring_joints and not locked
     # Free joints carry no stiffness in *relative* joint values; with absolute user
     # coordinates a spring on one joint couples its neighbours' user coordinates. The modal
     # reduction therefore works in [x; r_kept] with r_kept = W q_kept (x = 0 in the locks).
     model._modal_Winv = None
-    if not model._joints_plain:
+    if not model.plan.joints_plain:
         Tq = np.zeros((nv, len(kept)))
         Tq[kept, np.arange(len(kept))] = 1.0
         if locked:
@@ -212,7 +212,7 @@ def apply(model, terms, alg, twist, M, Mdesign, K):
     ``M``, ``K`` (b, nx + nv, nx + nv) and ``Mdesign`` (ny, b, ...) come from the assembly in
     ``[x; q_all]``; the result is over the modal coordinates ``[x; q_kept]``.
     """
-    if model._joints_plain:
+    if model.plan.joints_plain:
         return M, Mdesign, K
     if model._spring_joints:
         gx = parent_rows(model, terms, alg, twist, [j for j, _ in model._spring_joints])
@@ -235,7 +235,7 @@ def apply(model, terms, alg, twist, M, Mdesign, K):
 
 def relative_motion_rows(model, terms, alg, twist) -> np.ndarray:
     """Rows ``G`` (b, nv, nx + nv): physical relative joint motion ``r = G [x; q_all]``."""
-    by_col = {j.user_col: j for j in model._joints if j.user_col >= 0}
+    by_col = {j.user_col: j for j in model.plan.joints if j.user_col >= 0}
     ordered = [by_col[i] for i in range(model.nv)]
     gx = parent_rows(model, terms, alg, twist, ordered) if ordered else None
     C = alg.const(model.coord_map)

@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from pinflex.erls import joints, solve
 from pinflex.erls.terms import BatchAlgebra
@@ -271,23 +270,22 @@ def node_fields(model, q: np.ndarray, shapes: np.ndarray, terms=None):
     """
     if terms is None:
         terms = model.pose_terms(q[None])
-    twist = model._root_twists(terms, BatchAlgebra(1))
+    twist = model.root_twists(terms, BatchAlgebra(1))
     T = joints.transform(model, terms, BatchAlgebra(1), twist)
     if T is not None:  # locked joints: back to [x; q_all]
         shapes = T[0] @ shapes
-    pin.framesForwardKinematics(model.model, model.data, model.pin_configuration(q))
+    placements = model.node_placements(q)
     positions, motion, elastic = {}, {}, {}
     nx = model.nx
-    for link, plan in model._flex.items():
-        oMf = model.data.oMf[model._frame_id[link]]
+    for link, plan in model.plan.beams.items():
         e = twist[link]
         bx = plan.sel if e is None else plan.sel + plan.root @ e[0]
         jn = plan.jac @ terms.jac[link][0]
-        Rw = rotate_twist(oMf.rotation @ plan.spec.rotation)
+        Rw = rotate_twist(placements[link].rotation)
         n1 = plan.nodes.shape[0]
         el = (bx @ shapes[:nx]).T.reshape(-1, n1, 6)
         tot = el + (jn @ shapes[nx:]).T.reshape(-1, n1, 6)
-        positions[link] = plan.nodes @ oMf.rotation.T + oMf.translation
+        positions[link] = placements[link].positions_m
         motion[link] = np.einsum("ij,knj->kni", Rw, tot)
         elastic[link] = np.einsum("ij,knj->kni", Rw, el)
     return positions, motion, elastic

@@ -28,7 +28,10 @@ pair and no spurious near-zero ones; the ``nv`` rigid modes are counted, not com
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from types import MappingProxyType
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -36,14 +39,16 @@ import pinocchio as pin
 from pinflex.description import NAMESPACE, RobotDescription, load
 from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
-from pinflex.erls import modal, plan
+from pinflex.erls import modal
+from pinflex.erls.plan import build_plan, coordinate_map
 from pinflex.erls.terms import (
+    Attachment,
     BatchAlgebra,
     DesignVariable,
-    _Attachment,
-    _offset_block,
-    _PoseTerms,
-    _zeros_like,
+    ModelPlan,
+    PoseTerms,
+    offset_block,
+    zeros_like,
 )
 from pinflex.exceptions import (
     ConfigurationError,
@@ -55,6 +60,18 @@ from pinflex.exceptions import (
 from pinflex.linalg import axis_rotation, rotate_twist, translate_twist
 from pinflex.resources import check_modal
 from pinflex.validation import require_array, require_count
+
+
+class NodePlacement(NamedTuple):
+    """World placement of a beam's nodes at one pose.
+
+    Attributes:
+        positions_m: Node positions (N+1, 3) in the world frame [m].
+        rotation: Rotation (3, 3) of the beam axes in the world frame.
+    """
+
+    positions_m: np.ndarray
+    rotation: np.ndarray
 
 
 def add_design_masses(M0: np.ndarray, Md: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -136,7 +153,7 @@ class FlexibleModel:
                 f"coordinates='{coordinates}': expected 'relative' or 'absolute'"
             )
         self.coordinates = "absolute" if absolute else "relative"
-        self.coord_map = plan.coordinate_map(self, absolute)
+        self.coord_map = coordinate_map(self, absolute)
         self._pm_values = {p.name: p.mass for p in description.point_masses}
         self.design = tuple(
             DesignVariable(p.name, p.lower, p.upper, p.mass)
@@ -156,7 +173,11 @@ class FlexibleModel:
         for name, value in values.items():
             if name not in params:
                 self.set_value(name, value)
-        plan.build_plan(self)
+        #: The fixed, read-only layout (links, beams, joints, carriers; see ModelPlan).
+        self.plan: ModelPlan = build_plan(self)
+        self.nx = self.plan.nx
+        self.ndof = self.nx + self.nv
+        self.x_names = self.plan.x_names
         joint_conditions.setup(self, joints)
         design_channels.setup(self)
         check_modal(self.ndof, 1, f"the model of robot '{description.name}'")
@@ -250,6 +271,36 @@ class FlexibleModel:
         if value < 0.0:
             raise DesignVariableOutOfBounds(name, value, 0.0, np.inf)
         self._pm_values[name] = value
+
+    @property
+    def point_mass_values(self) -> Mapping[str, float]:
+        """Current values of every point mass ``{name: kg}`` (read-only view)."""
+        return MappingProxyType(self._pm_values)
+
+    @property
+    def plane_normal(self) -> np.ndarray | None:
+        """World normal (3,) of the plane of a planar model, None otherwise."""
+        return self.plan.plane_normal
+
+    def node_placements(self, q) -> dict[str, NodePlacement]:
+        """World placement of every beam's nodes at one pose.
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m].
+
+        Returns:
+            ``{link: NodePlacement}`` for every flexible link, in plan order: node positions
+            (N+1, 3) [m] and the rotation (3, 3) of the beam axes, both in the world frame.
+        """
+        q = self.check_q(q)
+        data = self.model.createData()
+        pin.framesForwardKinematics(self.model, data, self.pin_configuration(q))
+        out = {}
+        for link, bp in self.plan.beams.items():
+            oMf = data.oMf[self.plan.frame_ids[link]]
+            out[link] = NodePlacement(bp.nodes @ oMf.rotation.T + oMf.translation,
+                                      oMf.rotation @ bp.spec.rotation)
+        return out
 
     @property
     def design_names(self) -> tuple[str, ...]:
@@ -373,12 +424,12 @@ class FlexibleModel:
         return out
 
     # ------------------------------------------------------------------ assembly
-    def pose_terms(self, Q: np.ndarray) -> _PoseTerms:
+    def pose_terms(self, Q: np.ndarray) -> PoseTerms:
         """Pinocchio Jacobians and joint rotations at poses Q (n, nv)."""
         model, data = self.model, self.data
         n = Q.shape[0]
-        jac = {link: np.zeros((n, 6, self.nv)) for link in self._carriers}
-        fids = [(link, self._frame_id[link]) for link in self._carriers]
+        jac = {link: np.zeros((n, 6, self.nv)) for link in self.plan.carriers}
+        fids = [(link, self.plan.frame_ids[link]) for link in self.plan.carriers]
         for i in range(n if self.nv else 0):
             qp = self.pin_configuration(Q[i])
             pin.computeJointJacobians(model, data, qp)
@@ -388,14 +439,14 @@ class FlexibleModel:
             jac[link] = jac[link] @ self.coord_map
         qrel = Q @ self.coord_map.T
         rot, slide = {}, {}
-        for j in self._joints:
+        for j in self.plan.joints:
             if j.kind == "revolute":
                 rot[j.name] = j.R_o @ axis_rotation(j.axis, qrel[:, j.user_col])
             elif j.kind == "prismatic":
                 slide[j.name] = (j.R_o @ j.axis)[None, :] * qrel[:, j.user_col, None]
-        return _PoseTerms(jac, rot, slide)
+        return PoseTerms(jac, rot, slide)
 
-    def assemble(self, terms: _PoseTerms, alg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def assemble(self, terms: PoseTerms, alg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Assemble M without design masses, M per unit design mass, and K.
 
         Works on any algebra ``alg`` (poses or Taylor coefficients on the leading axis).
@@ -405,32 +456,34 @@ class FlexibleModel:
         """
         nx = self.nx
         nd = nx + self.nv  # [x; q_all]; joint conditions map to the modal coordinates
-        twist = self._root_twists(terms, alg)
+        twist = self.root_twists(terms, alg)
         M = None
         K = None
-        for link in self._flex:
+        for link, bp in self.plan.beams.items():
             e = twist[link]
-            a = self._assembly_arrays[link]
-            bx = alg.const(a["sel"]) if e is None else alg.const(a["sel"]) + a["root"] @ e
-            w = np.concatenate([bx, a["jac"] @ terms.jac[link]], axis=-1)
-            m = alg.mm(np.swapaxes(w, -1, -2), a["mass"] @ w)
-            k = alg.mm(np.swapaxes(bx, -1, -2), a["stiffness"] @ bx)
+            sel, root, jac, mass, stiffness = bp.kept
+            bx = alg.const(sel) if e is None else alg.const(sel) + root @ e
+            w = np.concatenate([bx, jac @ terms.jac[link]], axis=-1)
+            m = alg.mm(np.swapaxes(w, -1, -2), mass @ w)
+            k = alg.mm(np.swapaxes(bx, -1, -2), stiffness @ bx)
             M = m if M is None else M + m
             K = k if K is None else K + k
-        for link, inertia in self._inertias.items():
+        for link, inertia in self.plan.inertias.items():
             e = twist[link]
             jl = terms.jac[link]
-            g = np.concatenate([_zeros_like(jl, nx) if e is None else e, jl], axis=-1)
+            g = np.concatenate([zeros_like(jl, nx) if e is None else e, jl], axis=-1)
             m = alg.mm(np.swapaxes(g, -1, -2), inertia @ g)
             M = m if M is None else M + m
         design_index = self._mass_design_index
-        shape_b = terms.jac[self._carriers[0]].shape[:1] if self._carriers else (1,)
+        carriers = self.plan.carriers
+        shape_b = terms.jac[carriers[0]].shape[:1] if carriers else (1,)
         Mdesign = np.zeros((self.ny,) + shape_b + (nd, nd))
-        for name, link, xyz, att in self._point_masses:
+        for pm in self.plan.point_masses:
+            name, link, xyz = pm.name, pm.link, pm.xyz
             jl = terms.jac[link]
-            tau = self._twist_at(alg, att, twist[link])
+            tau = self._twist_at(alg, pm.attach, twist[link])
             g = np.concatenate(
-                [_zeros_like(jl, nx) if tau is None else tau, translate_twist(xyz) @ jl], axis=-1
+                [zeros_like(jl, nx) if tau is None else tau, translate_twist(xyz) @ jl], axis=-1
             )[..., :3, :]
             m = alg.mm(np.swapaxes(g, -1, -2), g)
             if name in design_index:
@@ -444,17 +497,26 @@ class FlexibleModel:
             Kfull[..., :nx, :nx] = K
         return joint_conditions.apply(self, terms, alg, twist, M, Mdesign, Kfull)
 
-    def _root_twists(self, terms: _PoseTerms, alg) -> dict:
-        """Elastic twist of every link root in link axes, (b, 6, nx), or None when zero."""
-        twist = {self._order[0]: None}
-        for j in self._joints:
+    def root_twists(self, terms: PoseTerms, alg) -> dict[str, np.ndarray | None]:
+        """Elastic twist of every link root in link axes.
+
+        Args:
+            terms: Pose terms of ``b`` poses (:meth:`pose_terms`) or their jets.
+            alg: The algebra of the leading axis (:class:`BatchAlgebra` for poses).
+
+        Returns:
+            ``{link: (b, 6, nx) array}``, or None for a link whose root does not move
+            elastically; linear in the elastic coordinates ``x``.
+        """
+        twist: dict[str, np.ndarray | None] = {self.plan.root: None}
+        for j in self.plan.joints:
             tau = self._twist_at(alg, j.attach, twist[j.parent])
             if tau is None:
                 twist[j.child] = None
                 continue
             if j.kind == "prismatic":
                 # move to the child origin, offset R_o a d from the guide's mount point
-                tau = tau + alg.mm(_offset_block(terms.slide[j.name]), tau)
+                tau = tau + alg.mm(offset_block(terms.slide[j.name]), tau)
                 R = alg.const(j.R_o)
             elif j.kind == "revolute":
                 R = terms.rot[j.name]
@@ -464,7 +526,7 @@ class FlexibleModel:
         return twist
 
     @staticmethod
-    def _twist_at(alg, att: _Attachment, root_twist):
+    def _twist_at(alg, att: Attachment, root_twist):
         if root_twist is None or att.lin is None:
             return None if att.const is None else alg.const(att.const)
         out = att.lin @ root_twist
@@ -492,7 +554,7 @@ class FlexibleModel:
         M, K = self.matrices_from_terms(self.pose_terms(Qb), y, Qb.shape[0])
         return (M[0], K[0]) if single else (M, K)
 
-    def matrices_from_terms(self, terms: _PoseTerms, y: np.ndarray, n_poses: int):
+    def matrices_from_terms(self, terms: PoseTerms, y: np.ndarray, n_poses: int):
         """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs."""
         M0, Md, K = self.assemble(terms, BatchAlgebra(n_poses))
         M = add_design_masses(M0, Md, y)
@@ -529,7 +591,7 @@ class FlexibleModel:
             raise ConfigurationError("joint_transform() takes one pose")
         terms = self.pose_terms(q[None])
         alg = BatchAlgebra(1)
-        T = joint_conditions.transform(self, terms, alg, self._root_twists(terms, alg))
+        T = joint_conditions.transform(self, terms, alg, self.root_twists(terms, alg))
         return np.eye(self.ndof) if T is None else T[0]
 
     def full_shapes(self, q, shapes: np.ndarray) -> np.ndarray:
@@ -548,7 +610,7 @@ class FlexibleModel:
         terms = self.pose_terms(q[None])
         alg = BatchAlgebra(1)
         return joint_conditions.relative_motion_rows(self, terms, alg,
-                                                     self._root_twists(terms, alg))[0]
+                                                     self.root_twists(terms, alg))[0]
 
     # ------------------------------------------------------------------ modal analysis
     def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True):

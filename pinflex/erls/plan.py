@@ -2,12 +2,22 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from types import MappingProxyType
+
 import numpy as np
 import pinocchio as pin
 
 from pinflex import beam
 from pinflex.description import FlexibleLink
-from pinflex.erls.terms import PLANAR_NODE_DOFS, _Attachment, _ChildJoint, _FlexPlan
+from pinflex.erls.terms import (
+    PLANAR_NODE_DOFS,
+    Attachment,
+    BeamPlan,
+    JointPlan,
+    ModelPlan,
+    PointMassPlan,
+)
 from pinflex.exceptions import ConfigurationError, PlanarModelError
 from pinflex.linalg import rotate_twist, translate_twist
 
@@ -40,23 +50,35 @@ def coordinate_map(model, absolute: bool) -> np.ndarray:
     return C
 
 
-def build_plan(model) -> None:
-    """Lay out elastic coordinates, beam plans, joint attachments and mass carriers."""
+def _frozen(values, dtype=float) -> np.ndarray:
+    array = np.array(values, dtype=dtype)
+    array.setflags(write=False)
+    return array
+
+
+def build_plan(model) -> ModelPlan:
+    """Lay out elastic coordinates, beam plans, joint attachments and mass carriers.
+
+    Args:
+        model: A :class:`~pinflex.erls.FlexibleModel` whose description, Pinocchio model,
+            ``planar`` flag and ``nv`` are set.
+
+    Returns:
+        The model's read-only :class:`~pinflex.erls.terms.ModelPlan`.
+
+    Raises:
+        PlanarModelError: A planar model whose axes or beams leave the plane.
+    """
     desc = model.description
     # breadth-first order from the root
     order = [desc.root]
     for link in order:
         for jn in desc.child_joints[link]:
             order.append(desc.joints[jn].child)
-    model._order = tuple(order)
-    model._frame_id = {
-        link: model.model.getFrameId(link, pin.FrameType.BODY) for link in desc.links
-    }
+    frame_ids = {link: model.model.getFrameId(link, pin.FrameType.BODY) for link in desc.links}
     # elastic coordinates
-    flex_plans: dict[str, _FlexPlan] = {}
     node_dofs = PLANAR_NODE_DOFS if model.planar else tuple(range(6))
-    if model.planar:
-        check_planar(model)
+    normal = check_planar(model) if model.planar else None
     offset = 0
     layout = []
     for link in order:
@@ -66,24 +88,11 @@ def build_plan(model) -> None:
             cols = offset + np.arange(n * len(node_dofs))
             layout.append((link, spec, cols))
             offset += cols.size
-    model.nx = offset
-    model.ndof = model.nx + model.nv
-    for link, spec, cols in layout:
-        flex_plans[link] = flex_plan(model, spec, cols, node_dofs)
-    model._flex = flex_plans
+    nx = offset
     # node-dof rows kept in the assembly: the in-plane ones in planar mode (out-of-plane
     # rows vanish there, and the beam decouples in- and out-of-plane motion)
-    model._assembly_arrays = {
-        link: {
-            "sel": p.sel[p.rows],
-            "root": p.root[p.rows],
-            "jac": p.jac[p.rows],
-            "mass": p.mass[np.ix_(p.rows, p.rows)],
-            "stiffness": p.stiffness[np.ix_(p.rows, p.rows)],
-        }
-        for link, p in flex_plans.items()
-    }
-    model.x_names = tuple(
+    beams = {link: flex_plan(nx, spec, cols, node_dofs) for link, spec, cols in layout}
+    x_names = tuple(
         f"{link}.n{k + 1}.{'u' if d < 3 else 'r'}{'xyz'[d % 3]}"
         for link, spec, _ in layout
         for k in range(spec.elements)
@@ -102,35 +111,53 @@ def build_plan(model) -> None:
         elif kind == "prismatic":
             proj[:3, :3] -= np.outer(jd.axis, jd.axis)
         joints.append(
-            _ChildJoint(
+            JointPlan(
                 name=jd.name,
                 parent=jd.parent,
                 child=link,
                 kind=kind,
                 user_col=vidx.get(jd.name, -1),
-                R_o=jd.rotation,
-                xyz=jd.xyz,
-                axis=jd.axis,
-                attach=attachment(model, jd.parent, jd.xyz),
-                proj=proj,
+                R_o=_frozen(jd.rotation),
+                xyz=_frozen(jd.xyz),
+                axis=_frozen(jd.axis),
+                attach=attachment(beams, jd.parent, jd.xyz),
+                proj=_frozen(proj),
             )
         )
-    model._joints = tuple(joints)
     # mass carriers
-    model._inertias = {
-        link: inertia.spatial_matrix()
+    inertias = {
+        link: _frozen(inertia.spatial_matrix())
         for link, inertia in desc.inertias.items()
         if link not in desc.flexible and inertia.mass > 0.0
     }
-    model._point_masses = tuple(
-        (p.name, p.link, p.xyz, attachment(model, p.link, p.xyz)) for p in desc.point_masses
+    point_masses = tuple(
+        PointMassPlan(p.name, p.link, _frozen(p.xyz), attachment(beams, p.link, p.xyz))
+        for p in desc.point_masses
     )
-    carriers = set(model._flex) | set(model._inertias) | {p[1] for p in model._point_masses}
-    model._carriers = tuple(link for link in order if link in carriers)
+    carriers = set(beams) | set(inertias) | {p.link for p in point_masses}
+    return ModelPlan(
+        links=tuple(order),
+        beams=MappingProxyType(beams),
+        joints=tuple(joints),
+        inertias=MappingProxyType(inertias),
+        point_masses=point_masses,
+        carriers=tuple(link for link in order if link in carriers),
+        frame_ids=MappingProxyType(frame_ids),
+        nx=nx,
+        x_names=x_names,
+        plane_normal=None if normal is None else _frozen(normal),
+    )
 
 
-def flex_plan(model, spec: FlexibleLink, cols: np.ndarray, node_dofs) -> _FlexPlan:
-    """Constant matrices of one flexible link: element assembly, selections, node Jacobians."""
+def flex_plan(nx: int, spec: FlexibleLink, cols: np.ndarray, node_dofs) -> BeamPlan:
+    """Constant matrices of one flexible link: element assembly, selections, node Jacobians.
+
+    Args:
+        nx: Number of elastic coordinates of the whole model.
+        spec: The link's beam annotation.
+        cols: Columns of ``x`` owned by nodes 1..N of this beam.
+        node_dofs: Node dofs kept per node (all six, or the in-plane ones).
+    """
     n = spec.elements
     le = spec.length_m / n
     sec = spec.section
@@ -141,7 +168,7 @@ def flex_plan(model, spec: FlexibleLink, cols: np.ndarray, node_dofs) -> _FlexPl
     M = beam.assemble_line(np.broadcast_to(me, (n, 12, 12)))
     rb = spec.rotation
     nodes = np.linspace(0.0, 1.0, n + 1)[:, None] * spec.tip[None, :]
-    sel = np.zeros((6 * (n + 1), model.nx))
+    sel = np.zeros((6 * (n + 1), nx))
     k = 0
     for node in range(1, n + 1):
         for d in node_dofs:
@@ -151,14 +178,21 @@ def flex_plan(model, spec: FlexibleLink, cols: np.ndarray, node_dofs) -> _FlexPl
     root[:6] = rotate_twist(rb.T)
     jac = np.concatenate([rotate_twist(rb.T) @ translate_twist(p) for p in nodes])
     rows = (6 * np.arange(n + 1)[:, None] + np.asarray(node_dofs)[None, :]).ravel()
-    return _FlexPlan(spec.link, spec, cols, sel, root, jac, M, K, nodes, rows)
+    return BeamPlan(spec.link, spec, _frozen(cols, int), _frozen(sel), _frozen(root),
+                    _frozen(jac), _frozen(M), _frozen(K), _frozen(nodes), _frozen(rows, int))
 
 
-def attachment(model, link: str, point: np.ndarray) -> _Attachment:
-    """Elastic twist of a point given in the frame of ``link`` (in link axes)."""
-    plan = model._flex.get(link)
+def attachment(beams: Mapping[str, BeamPlan], link: str, point: np.ndarray) -> Attachment:
+    """Elastic twist of a point given in the frame of ``link`` (in link axes).
+
+    Args:
+        beams: Plans of the flexible links.
+        link: Link carrying the point.
+        point: (3,) position in the link frame [m].
+    """
+    plan = beams.get(link)
     if plan is None:
-        return _Attachment(None, translate_twist(point))
+        return Attachment(None, _frozen(translate_twist(point)))
     spec = plan.spec
     L, n = spec.length_m, spec.elements
     xdir = spec.tip / L
@@ -172,11 +206,16 @@ def attachment(model, link: str, point: np.ndarray) -> _Attachment:
     rows = slice(6 * e, 6 * e + 12)
     const = to_link @ shape @ plan.sel[rows]
     lin = to_link @ shape @ plan.root[rows] if e == 0 else None
-    return _Attachment(const if np.any(const) else None, lin)
+    return Attachment(_frozen(const) if np.any(const) else None,
+                      None if lin is None else _frozen(lin))
 
 
-def check_planar(model) -> None:
-    """Check that the arm moves in one plane with beams normal to it; set plane_normal."""
+def check_planar(model) -> np.ndarray | None:
+    """Check that the arm moves in one plane with beams normal to it.
+
+    Returns:
+        The world normal (3,) of the plane, or None for an arm without revolute joints or beams.
+    """
     desc, pmodel = model.description, model.model
     data = pmodel.createData()
     pin.framesForwardKinematics(pmodel, data, pin.neutral(pmodel))
@@ -209,4 +248,4 @@ def check_planar(model) -> None:
             a = data.oMi[pmodel.getJointId(name)].rotation @ jd.axis
             if abs(a @ normal) > 1e-9:
                 raise PlanarModelError(f"prismatic joint '{name}' leaves the plane")
-    model.plane_normal = normal
+    return normal

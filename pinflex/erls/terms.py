@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,48 +35,164 @@ class DesignVariable:
 
 
 @dataclass(frozen=True)
-class _FlexPlan:
+class Attachment:
+    """Elastic twist (small motion, link axes) at a point of a link.
+
+    ``twist = const + lin @ (elastic twist of the link root)``, linear in the elastic
+    coordinates ``x``.
+
+    Attributes:
+        const: (6, nx) part from the link's own beam dofs, or None when the point has none.
+        lin: (6, 6) map of the link root's twist, or None when the point does not see it.
+    """
+
+    const: np.ndarray | None
+    lin: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class BeamPlan:
+    """Constant matrices of one flexible link (all arrays read-only).
+
+    Node ``k = 0..N`` of a beam of ``N`` elements has 6 dofs ``(ux, uy, uz, θx, θy, θz)`` in
+    the beam axes; node 0 is the root, attached to the parent link.
+
+    Attributes:
+        link: Link name.
+        spec: The link's beam annotation (length, section, material, element count).
+        x_cols: Columns of ``x`` owned by nodes 1..N, (n_own,) int.
+        sel: (6(N+1), nx) selection of the node dofs from ``x``.
+        root: (6(N+1), 6) places the root twist (link axes) at node 0 in beam axes.
+        jac: (6(N+1), 6) link-origin velocity -> node velocities in beam axes.
+        mass: (6(N+1), 6(N+1)) assembled consistent mass [kg, kg m, kg m²].
+        stiffness: (6(N+1), 6(N+1)) assembled stiffness [N/m, N, N m].
+        nodes: (N+1, 3) node positions in the link frame [m].
+        rows: Node-dof rows kept in the assembly (the in-plane ones in planar mode), int.
+    """
+
     link: str
     spec: FlexibleLink
-    x_cols: np.ndarray  # columns of x owned by nodes 1..N
-    sel: np.ndarray  # (6(N+1), nx) constant selection of node dofs from x
-    root: np.ndarray  # (6(N+1), 6) places the root twist (link axes) at node 0 in beam axes
-    jac: np.ndarray  # (6(N+1), 6) link-origin velocity -> node velocities in beam axes
-    mass: np.ndarray  # (6(N+1), 6(N+1)) assembled consistent mass
-    stiffness: np.ndarray  # (6(N+1), 6(N+1)) assembled stiffness
-    nodes: np.ndarray  # (N+1, 3) node positions in the link frame [m]
-    rows: np.ndarray  # node-dof rows used in the assembly (in-plane ones in planar mode)
+    x_cols: np.ndarray
+    sel: np.ndarray
+    root: np.ndarray
+    jac: np.ndarray
+    mass: np.ndarray
+    stiffness: np.ndarray
+    nodes: np.ndarray
+    rows: np.ndarray
+    kept: tuple[np.ndarray, ...] = field(init=False, repr=False, compare=False)
+    """``(sel, root, jac, mass, stiffness)`` restricted to :attr:`rows` (what the assembly
+    uses; derived, read-only)."""
+
+    def __post_init__(self) -> None:
+        r = self.rows
+        kept = (self.sel[r], self.root[r], self.jac[r], self.mass[np.ix_(r, r)],
+                self.stiffness[np.ix_(r, r)])
+        for array in kept:
+            array.setflags(write=False)
+        object.__setattr__(self, "kept", kept)
 
 
 @dataclass(frozen=True)
-class _Attachment:
-    """Elastic twist at a point of a link = const + lin @ (twist of the link root)."""
+class JointPlan:
+    """A joint seen from its child link (all arrays read-only).
 
-    const: np.ndarray | None  # (6, nx), or None when the point has no own elastic dofs
-    lin: np.ndarray | None  # (6, 6) or None when the point does not see the root twist
+    Attributes:
+        name: Joint name.
+        parent: Parent link.
+        child: Child link.
+        kind: 'revolute', 'prismatic' or 'fixed'.
+        user_col: Index of the joint in Pinocchio's velocity order (-1 when fixed).
+        R_o: (3, 3) rotation of the joint origin in the parent frame.
+        xyz: (3,) joint origin in the parent frame [m].
+        axis: (3,) unit joint axis in the joint frame.
+        attach: Elastic twist of the joint origin on the parent link.
+        proj: (6, 6) removes the joint's motion subspace (in child axes).
+    """
 
-
-@dataclass(frozen=True)
-class _ChildJoint:
     name: str
     parent: str
     child: str
-    kind: str  # 'revolute', 'prismatic' or 'fixed'
-    user_col: int  # index of the joint in pin velocity order (-1 when fixed)
+    kind: str
+    user_col: int
     R_o: np.ndarray
     xyz: np.ndarray
     axis: np.ndarray
-    attach: _Attachment
-    proj: np.ndarray  # (6, 6) removes the motion subspace (in child axes)
+    attach: Attachment
+    proj: np.ndarray
+
+
+@dataclass(frozen=True)
+class PointMassPlan:
+    """A point mass on a link.
+
+    Attributes:
+        name: Name of the point mass (a design variable when declared so).
+        link: Link carrying it.
+        xyz: (3,) position in the link frame [m], read-only.
+        attach: Elastic twist of that point.
+    """
+
+    name: str
+    link: str
+    xyz: np.ndarray
+    attach: Attachment
+
+
+@dataclass(frozen=True)
+class ModelPlan:
+    """The fixed layout of a :class:`~pinflex.erls.FlexibleModel` (``model.plan``).
+
+    Built once by :func:`pinflex.erls.plan.build_plan`; read-only: arrays cannot be written and
+    mappings cannot be changed. This is the API other layers (previews, Taylor models) read.
+
+    Attributes:
+        links: Every link, breadth-first from the root (the root first).
+        beams: Flexible links ``{link: BeamPlan}``, in the order of :attr:`links`.
+        joints: Every joint as seen from its child, in the order of :attr:`links` [1:].
+        inertias: Rigid links with mass ``{link: (6, 6) spatial inertia at the link origin}``.
+        point_masses: Point masses, in the description's order.
+        carriers: Links that carry mass (beams, rigid inertias or point masses), in order.
+        frame_ids: Pinocchio BODY frame id of every link.
+        nx: Number of elastic coordinates.
+        x_names: Names of the elastic coordinates ``link.nK.{u,r}{x,y,z}``, (nx,).
+        plane_normal: (3,) world normal of the plane of motion of a planar model, or None.
+    """
+
+    links: tuple[str, ...]
+    beams: Mapping[str, BeamPlan]
+    joints: tuple[JointPlan, ...]
+    inertias: Mapping[str, np.ndarray]
+    point_masses: tuple[PointMassPlan, ...]
+    carriers: tuple[str, ...]
+    frame_ids: Mapping[str, int]
+    nx: int
+    x_names: tuple[str, ...]
+    plane_normal: np.ndarray | None = None
+
+    @property
+    def root(self) -> str:
+        """The root link (clamped to the ground)."""
+        return self.links[0]
+
+    def nodes(self, link: str) -> np.ndarray:
+        """Node positions (N+1, 3) of a flexible link in its link frame [m]."""
+        return self.beams[link].nodes
 
 
 @dataclass
-class _PoseTerms:
-    """Pose-dependent inputs of the assembly (leading axis: poses or Taylor coefficients)."""
+class PoseTerms:
+    """Pose-dependent inputs of the assembly (leading axis: poses or Taylor coefficients).
 
-    jac: dict[str, np.ndarray]  # link -> (b, 6, nv) LOCAL Jacobian in user coordinates
-    rot: dict[str, np.ndarray]  # moving joint -> (b, 3, 3) child-in-parent rotation
-    slide: dict[str, np.ndarray] = field(default_factory=dict)  # prismatic joint -> (b, 3)
+    Attributes:
+        jac: ``{link: (b, 6, nv)}`` LOCAL frame Jacobian of each carrier, user coordinates.
+        rot: ``{moving joint: (b, 3, 3)}`` child-in-parent rotation.
+        slide: ``{prismatic joint: (b, 3)}`` offset of the child origin [m].
+    """
+
+    jac: dict[str, np.ndarray]
+    rot: dict[str, np.ndarray]
+    slide: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 class BatchAlgebra:
@@ -94,13 +211,13 @@ class BatchAlgebra:
         return a @ b
 
 
-
-def _offset_block(p: np.ndarray) -> np.ndarray:
+def offset_block(p: np.ndarray) -> np.ndarray:
     """The part of ``translate_twist(p) - I`` (linear in ``p``), batched."""
     out = np.zeros(p.shape[:-1] + (6, 6))
     out[..., :3, 3:] = -skew(p)
     return out
 
 
-def _zeros_like(jac: np.ndarray, nx: int) -> np.ndarray:
+def zeros_like(jac: np.ndarray, nx: int) -> np.ndarray:
+    """Zeros of the shape of ``jac`` with ``nx`` columns (an absent elastic twist)."""
     return np.zeros(jac.shape[:-1] + (nx,))

@@ -26,7 +26,7 @@ def beam_spatial_inertia(plan) -> np.ndarray:
 
 def effective_inertias(arm) -> dict[str, pin.Inertia]:
     """``{flexible link: pin.Inertia}`` of the beams at the link origin in link axes."""
-    return {link: _from_spatial(beam_spatial_inertia(p)) for link, p in arm._flex.items()}
+    return {link: _from_spatial(beam_spatial_inertia(p)) for link, p in arm.plan.beams.items()}
 
 
 def effective_model(arm, y=None, *, point_masses: bool = True) -> pin.Model:
@@ -57,7 +57,7 @@ def effective_model(arm, y=None, *, point_masses: bool = True) -> pin.Model:
             add(link, pin.Inertia(urdf.mass, urdf.com, urdf.inertia), -1.0)
         add(link, inertia)
     if point_masses:
-        values = dict(arm._pm_values)
+        values = dict(arm.point_mass_values)
         yv = arm.check_y(y)
         for d, v in zip(arm.design, np.atleast_1d(yv)):
             values[d.name] = float(v)

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from pinflex import jets
-from pinflex.erls import BatchAlgebra, FlexibleModel, _PoseTerms
+from pinflex.erls import BatchAlgebra, FlexibleModel, PoseTerms
 from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
 from pinflex.jets import JetSpace
 from pinflex.linalg import axis_rotation, skew
@@ -53,7 +53,7 @@ def _rotation_jet(space: JetSpace, axis: np.ndarray, angle0: float, terms) -> np
 
 
 def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
-              joint_vars: dict[int, int]) -> _PoseTerms:
+              joint_vars: dict[int, int]) -> PoseTerms:
     """Jets of the ERLS pose terms (frame Jacobians, joint rotations) at ``q0``.
 
     Args:
@@ -64,9 +64,9 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
     """
     nv, nc = model.nv, space.ncoef
     q0p = model.coord_map @ q0
-    J = {model._order[0]: np.zeros((nc, 6, nv))}
+    J = {model.plan.root: np.zeros((nc, 6, nv))}
     rot, slide = {}, {}
-    for j in model._joints:
+    for j in model.plan.joints:
         if j.kind == "revolute":
             terms = _angle_terms(model, joint_vars, j.user_col)
             R = j.R_o @ _rotation_jet(space, j.axis, q0p[j.user_col], terms)
@@ -96,8 +96,8 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
         elif j.kind == "prismatic":
             Jc[0, :3, j.user_col] += j.axis
         J[j.child] = Jc
-    jac = {link: J[link] @ model.coord_map for link in model._carriers}
-    return _PoseTerms(jac, rot, slide)
+    jac = {link: J[link] @ model.coord_map for link in model.plan.carriers}
+    return PoseTerms(jac, rot, slide)
 
 
 def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,

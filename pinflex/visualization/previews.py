@@ -64,7 +64,7 @@ class Preview:
 
 def view_direction(model: FlexibleModel) -> np.ndarray:
     """Direction from the scene to the camera: nearly along a planar robot's normal."""
-    normal = getattr(model, "plane_normal", None)
+    normal = model.plane_normal
     if model.planar and normal is not None:
         n = np.asarray(normal, dtype=float) / np.linalg.norm(normal)
         for v in ([0.0, -1.0, 0.0], [-1.0, 0.0, 0.0]):

@@ -100,10 +100,10 @@ class RobotDrawing:
         self.ghosts = bool(ghosts)
         self.rest = pose_state(model, self.q, self.spe)
         self.size_m = characteristic_length(self.rest)
-        radii = [shapes.beam_radius_m(model, link) for link in model._flex]
+        radii = [shapes.beam_radius_m(model, link) for link in model.plan.beams]
         self.joint_radius_m = max(1.25 * max(radii, default=0.0), 0.015 * self.size_m)
         self.beam_radius_m = {
-            link: max(r, 0.4 * self.joint_radius_m) for link, r in zip(model._flex, radii)
+            link: max(r, 0.4 * self.joint_radius_m) for link, r in zip(model.plan.beams, radii)
         }
         self.visual_model = load_visual_model(model)
         self._geoms: list[tuple[str, str, pin.SE3]] = []
@@ -131,7 +131,7 @@ class RobotDrawing:
         desc = model.description
         self._markers: list[tuple[str, list[tuple[str, np.ndarray]]]] = []
         for link in desc.links:
-            if link in with_visual or link in model._flex:
+            if link in with_visual or link in model.plan.beams:
                 continue
             M = rest.links[link]
             writer.add(f"markers/{link}", mg.Sphere(0.8 * self.joint_radius_m), link_mat,
@@ -145,7 +145,7 @@ class RobotDrawing:
                                link_mat, M.homogeneous @ T, sc)
                     offsets.append((jn, T))
             self._markers.append((link, offsets))
-        rigid_visual = with_visual - set(model._flex)
+        rigid_visual = with_visual - set(model.plan.beams)
         self._joints = [
             name for name in model.joint_names
             if desc.joints[name].child not in rigid_visual
@@ -162,7 +162,7 @@ class RobotDrawing:
                 writer.add(f"beams/{link}/{i}", mg.Cylinder(1.0, self.beam_radius_m[link]), mat,
                            T, sc)
         self._masses = []
-        values = dict(model._pm_values)
+        values = dict(model.point_mass_values)
         values.update({d.name: float(v) for d, v in zip(model.design, self.y)})
         for pm in desc.point_masses:
             mass = values[pm.name]
@@ -193,7 +193,7 @@ class RobotDrawing:
         for g in visual_model.geometryObjects:
             link = frames[g.parentFrame].name
             links.add(link)
-            if link in model._flex:
+            if link in model.plan.beams:
                 ghosts.append((g, link))
             else:
                 rigid.addGeometryObject(g)
@@ -224,9 +224,9 @@ class RobotDrawing:
 
     def mass_position(self, state: RobotState, link: str, xyz: np.ndarray) -> np.ndarray:
         """World position of a point of a link: on the drawn beam for a flexible link."""
-        if link not in self.model._flex:
+        if link not in self.model.plan.beams:
             return state.links[link].act(np.asarray(xyz, dtype=float))
-        spec = self.model._flex[link].spec
+        spec = self.model.plan.beams[link].spec
         axial = stations_local(self.model, link, self.spe) @ (spec.tip / spec.length_m)
         s = float(np.clip(xyz @ spec.tip / spec.length_m, 0.0, spec.length_m))
         st = state.beams[link]
@@ -256,7 +256,7 @@ class RobotDrawing:
 
 def stations_local(model: FlexibleModel, link: str, stations_per_element: int) -> np.ndarray:
     """Drawing stations of a flexible link in its link frame, (n_st, 3) [m]."""
-    spec = model._flex[link].spec
+    spec = model.plan.beams[link].spec
     n_el = spec.elements
     xi = np.linspace(0.0, 1.0, int(stations_per_element) + 1)[:-1]
     s = np.append((np.arange(n_el)[:, None] + xi[None, :]).ravel(), n_el) / n_el
@@ -267,7 +267,7 @@ def pose_state(model: FlexibleModel, q: np.ndarray, stations_per_element: int = 
     """The rigid robot at pose ``q`` (user coordinates): link placements and straight beams."""
     links = shapes.link_placements(model, q)
     beams = {}
-    for link in model._flex:
+    for link in model.plan.beams:
         M = links[link]
         st = stations_local(model, link, stations_per_element)
         beams[link] = st @ M.rotation.T + M.translation

@@ -51,18 +51,12 @@ class Centreline:
 
 def beam_rotations(model: FlexibleModel, q: np.ndarray) -> dict[str, np.ndarray]:
     """World rotation of each flexible link's beam axes at pose ``q``, (3, 3) per link."""
-    data = model.model.createData()
-    pin.framesForwardKinematics(model.model, data, model.pin_configuration(q))
-    out = {}
-    for link, plan in model._flex.items():
-        fid = model.model.getFrameId(link, pin.FrameType.BODY)
-        out[link] = data.oMf[fid].rotation @ plan.spec.rotation
-    return out
+    return {link: p.rotation for link, p in model.node_placements(q).items()}
 
 
 def beam_radius_m(model: FlexibleModel, link: str) -> float:
     """Drawing radius of a beam: the solid circle with the section's largest bending moment."""
-    sec = model._flex[link].spec.section
+    sec = model.plan.beams[link].spec.section
     return float((4.0 * max(sec.Iy, sec.Iz) / np.pi) ** 0.25)
 
 
@@ -95,7 +89,7 @@ def centrelines(
     xi = np.linspace(0.0, 1.0, int(stations_per_element) + 1)[:-1]
     rot = beam_rotations(model, result.q)
     out = {}
-    for link, plan in model._flex.items():
+    for link, plan in model.plan.beams.items():
         n_el = plan.spec.elements
         le = plan.spec.length_m / n_el
         R = rot[link]
@@ -152,7 +146,7 @@ def link_twists(model: FlexibleModel, q: np.ndarray, shapes: np.ndarray) -> dict
     nx = model.nx
     shapes = model.full_shapes(q, shapes)  # locked joints' coordinates back in
     terms = model.pose_terms(q[None])
-    roots = model._root_twists(terms, BatchAlgebra(1))
+    roots = model.root_twists(terms, BatchAlgebra(1))
     data = model.model.createData()
     pin.computeJointJacobians(model.model, data, model.pin_configuration(q))
     pin.updateFramePlacements(model.model, data)
