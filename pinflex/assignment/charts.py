@@ -16,9 +16,13 @@ from pinflex.outputs import output_dir, save_figure
 
 
 def _figure(width: float, height: float):
+    """A Figure on its own Agg canvas: pyplot and the process-wide backend are left alone."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    return Figure(figsize=(width, height), dpi=120)
+    fig = Figure(figsize=(width, height), dpi=120)
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def _constraints_of(result, mode: int, ax) -> None:

@@ -169,10 +169,8 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
     Returns:
         The written files.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     path = Path(path)
     out = Path(out_dir) if out_dir is not None else path.with_name(path.stem + "-report")
@@ -189,7 +187,9 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
             positive = np.asarray([v for v in values if v > 0.0])
             if positive.size == 0:
                 continue
-            fig, ax = plt.subplots(figsize=(6.0, 3.6))
+            fig = Figure(figsize=(6.0, 3.6))
+            FigureCanvasAgg(fig)  # its own canvas: the process-wide backend is left alone
+            ax = fig.add_subplot()
             n_bins = min(bins, max(5, 2 * int(np.sqrt(positive.size))))
             ax.hist(np.log10(positive), bins=n_bins, color="tab:blue", alpha=0.8)
             ax.axvline(np.log10(np.median(positive)), color="k", lw=1,
@@ -202,7 +202,6 @@ def write_histograms(path: str | Path, out_dir: str | Path | None = None,
             safe = re.sub(r"[^A-Za-z0-9._-]+", "-", name.split(" [")[0]).strip("-")
             file = out / f"{index:02d}_{safe}_{metric}.png"
             save_figure(fig, file, dpi=110)
-            plt.close(fig)
             written.append(file)
     return written
 

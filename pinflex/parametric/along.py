@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pinflex import jets
 from pinflex.erls import FlexibleModel
 from pinflex.jets import JetSpace
+from pinflex.linalg import readonly as _readonly
 from pinflex.parametric.model import TaylorModel, expand
 
 
@@ -136,6 +137,11 @@ class SampledTaylor:
     G: np.ndarray
     y0: np.ndarray
     design_idx: tuple[int, ...]
+    # derived once at construction: G as (ns·k, nβ), the value shape, and the monomial tree
+    _Gt: np.ndarray = field(init=False, repr=False, compare=False)
+    _shape: tuple[int, ...] = field(init=False, repr=False, compare=False)
+    _parent: list[int] = field(init=False, repr=False, compare=False)
+    _var: list[int] = field(init=False, repr=False, compare=False)
 
     def values(self, y=None) -> np.ndarray:
         """Polynomial values (ns, k) at the samples for design ``y`` [kg] (default y0)."""
@@ -149,9 +155,15 @@ class SampledTaylor:
             mon.append(mon[parent[c]] * dy[var[c]])
         return self._Gt.dot(np.array(mon)).reshape(self._shape)
 
-    def __post_init__(self):
-        object.__setattr__(self, "_Gt", np.ascontiguousarray(self.G.reshape(self.G.shape[0], -1).T))
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "G", _readonly(self.G))
+        object.__setattr__(self, "y0", _readonly(self.y0))
+        gt = np.ascontiguousarray(self.G.reshape(self.G.shape[0], -1).T)
+        gt.setflags(write=False)
+        object.__setattr__(self, "_Gt", gt)
         object.__setattr__(self, "_shape", self.G.shape[1:])
+        object.__setattr__(self, "_parent", [0])
+        object.__setattr__(self, "_var", [0])
         if self.space_y is not None:
             object.__setattr__(self, "_parent", self.space_y.parent.tolist())
             object.__setattr__(self, "_var", self.space_y.parent_var.tolist())

@@ -329,12 +329,12 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
             ev = final_evaluation(problem, x, jacobian)
         except (InvalidChain, np.linalg.LinAlgError, ValueError):
             bar.update(best=min((_score(e, kind, problem.metrics) for _, e in found),
-                                default=np.inf))
+                            default=np.inf))
             continue
         if np.isfinite(_score(ev, kind, problem.metrics)):
             found.append((x, ev))
         bar.update(best=min((_score(e, kind, problem.metrics) for _, e in found),
-                                default=np.inf))
+                            default=np.inf))
     if not found:
         raise MappingFailed(f"all {len(points)} starts of the {kind} mapping failed for "
                             f"{problem.n_joints}R; try more starts or another seed")
