@@ -1,6 +1,7 @@
 """Assignment studies described in a TOML file.
 
-Example (paths are relative to the file; ``builtin:`` names a file shipped in ``urdf/``)::
+Example (paths are relative to the file; ``builtin:`` names a file shipped with pinflex, see
+:mod:`pinflex.description.builtin`)::
 
     robot = "builtin:two_link.urdf"
     planar = true
@@ -53,23 +54,10 @@ import numpy as np
 
 from pinflex.assignment.driver import Target, assign_frequencies
 from pinflex.assignment.study_schema import check_against_model, check_study
+from pinflex.description.builtin import builtin_path
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError, StudyError
 from pinflex.trajectory import Trajectory, benchmark_a_trajectory
-
-URDF_DIR = Path(__file__).resolve().parents[2] / "urdf"
-
-
-def builtin_path(name: str) -> Path:
-    """Path of a description shipped in the repository's ``urdf/`` folder."""
-    path = URDF_DIR / name
-    if not path.is_file():
-        available = sorted(p.name for p in URDF_DIR.glob("*")) if URDF_DIR.is_dir() else []
-        raise ConfigurationError(
-            f"no built-in description '{name}'; available: {', '.join(available) or '(none)'} "
-            "(built-in files need an editable install: pip install -e .)"
-        )
-    return path
 
 
 def resolve(value: str, folder: Path) -> Path:
