@@ -3,26 +3,43 @@
 ERLS modal analysis of URDF arms with finite-element links, exact Taylor models of their
 eigenfrequencies in pose and design, eigenfrequency assignment by quadratic programming, and
 pseudo-rigid-body dynamic models of compliant beams.
+
+The names below are imported when first used (:mod:`pinflex.lazy`), so ``import pinflex`` and
+``import pinflex.jets`` load neither Pinocchio nor SciPy.
 """
 
-from pinflex.assignment import (
-    AssignmentResult,
-    Target,
-    assign_frequencies,
-    brute_force,
-    build_assignment,
-)
-from pinflex.description import RobotDescription, load
-from pinflex.erls import FlexibleModel, ModalResult
-from pinflex.exceptions import PinflexError, PinflexWarning
-from pinflex.native.robots import example_robot
-from pinflex.native.spec import Beam, Mass, Material
-from pinflex.parametric import TaylorModel, expand, matrix_jets
-from pinflex.trajectory import Trajectory
+from typing import TYPE_CHECKING
+
+from pinflex.lazy import lazy_exports
 
 __version__ = "0.1.0"
 
+_EXPORTS = {
+    "AssignmentResult": "pinflex.assignment",
+    "Beam": "pinflex.native.spec",
+    "FlexibleModel": "pinflex.erls",
+    "Mass": "pinflex.native.spec",
+    "Material": "pinflex.native.spec",
+    "ModalResult": "pinflex.erls",
+    "PinflexError": "pinflex.exceptions",
+    "PinflexWarning": "pinflex.exceptions",
+    "RobotDescription": "pinflex.description",
+    "Target": "pinflex.assignment",
+    "TaylorModel": "pinflex.parametric",
+    "Trajectory": "pinflex.trajectory",
+    "assign_frequencies": "pinflex.assignment",
+    "brute_force": "pinflex.assignment",
+    "build_assignment": "pinflex.assignment",
+    "example_robot": "pinflex.native.robots",
+    "expand": "pinflex.parametric",
+    "load": "pinflex.description",
+    "matrix_jets": "pinflex.parametric",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+
 __all__ = [
+    "__version__",
     "AssignmentResult",
     "Beam",
     "FlexibleModel",
@@ -35,7 +52,6 @@ __all__ = [
     "Target",
     "TaylorModel",
     "Trajectory",
-    "__version__",
     "assign_frequencies",
     "brute_force",
     "build_assignment",
@@ -44,3 +60,19 @@ __all__ = [
     "load",
     "matrix_jets",
 ]
+
+if TYPE_CHECKING:
+    from pinflex.assignment import (
+        AssignmentResult,
+        Target,
+        assign_frequencies,
+        brute_force,
+        build_assignment,
+    )
+    from pinflex.description import RobotDescription, load
+    from pinflex.erls import FlexibleModel, ModalResult
+    from pinflex.exceptions import PinflexError, PinflexWarning
+    from pinflex.native.robots import example_robot
+    from pinflex.native.spec import Beam, Mass, Material
+    from pinflex.parametric import TaylorModel, expand, matrix_jets
+    from pinflex.trajectory import Trajectory

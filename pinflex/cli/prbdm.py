@@ -11,10 +11,7 @@ import argparse
 
 import numpy as np
 
-from pinflex.prbdm.beams import random_beam, uniform_beam
-from pinflex.prbdm.mapping import fit_prbdm
 from pinflex.prbdm.options import OBJECTIVES, STIFFNESS_LAWS
-from pinflex.prbdm.problem import compute_truth
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -61,6 +58,9 @@ def run(args: argparse.Namespace) -> int:
     """Execute ``pinflex prbdm``; return the process exit status."""
     from pinflex.exceptions import ConfigurationError
     from pinflex.outputs import check_file_target
+    from pinflex.prbdm.beams import random_beam, uniform_beam
+    from pinflex.prbdm.mapping import fit_prbdm
+    from pinflex.prbdm.problem import compute_truth
     from pinflex.validation import require_count
 
     require_count(args.seed, "--seed", minimum=0, error=ConfigurationError)

@@ -164,12 +164,12 @@ def setup(model, joints) -> None:
         model._lock_T0 = T0
         model._lock_inv = inv
         model._lock_rows = nx + np.array(locked, dtype=int)
-    model.plan.joints_plain = not model._spring_joints and not locked
+    model._joints_plain = not model._spring_joints and not locked
     # Free joints carry no stiffness in *relative* joint values; with absolute user
     # coordinates a spring on one joint couples its neighbours' user coordinates. The modal
     # reduction therefore works in [x; r_kept] with r_kept = W q_kept (x = 0 in the locks).
     model._modal_Winv = None
-    if not model.plan.joints_plain:
+    if not model._joints_plain:
         Tq = np.zeros((nv, len(kept)))
         Tq[kept, np.arange(len(kept))] = 1.0
         if locked:
@@ -212,7 +212,7 @@ def apply(model, terms, alg, twist, M, Mdesign, K):
     ``M``, ``K`` (b, nx + nv, nx + nv) and ``Mdesign`` (ny, b, ...) come from the assembly in
     ``[x; q_all]``; the result is over the modal coordinates ``[x; q_kept]``.
     """
-    if model.plan.joints_plain:
+    if model._joints_plain:
         return M, Mdesign, K
     if model._spring_joints:
         gx = parent_rows(model, terms, alg, twist, [j for j, _ in model._spring_joints])

@@ -142,7 +142,7 @@ def matmul(space: JetSpace, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _matmul_gemm(space: JetSpace, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Unbatched matrix jets: one GEMM per degree of ``a``, then one sparse scatter."""
-    blocks, scatter = space._matmul_plan
+    blocks, scatter = space.matmul_plan
     _, n, m = a.shape
     r = b.shape[2]
     dtype = np.result_type(a, b)

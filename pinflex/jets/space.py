@@ -6,9 +6,12 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 
 def _compositions(degree: int, nvars: int) -> Iterator[tuple[int, ...]]:
@@ -154,7 +157,7 @@ class JetSpace:
         return self.index[key]
 
     @cached_property
-    def _matmul_plan(self) -> tuple[list[tuple[int, int, int, int]], sp.csr_matrix]:
+    def matmul_plan(self) -> tuple[list[tuple[int, int, int, int]], sp.csr_matrix]:
         """Per-degree GEMM blocks and the sparse scatter of their outputs into coefficients.
 
         For each degree ``d`` of the left factor, every left coefficient of degree ``d`` times
@@ -171,6 +174,8 @@ class JetSpace:
             sums = self.multi_indices[ai] + self.multi_indices[bj]
             targets.append(np.array([self.index[tuple(s)] for s in sums.tolist()], np.int64))
         tgt = np.concatenate(targets)
+        import scipy.sparse as sp
+
         scatter = sp.csr_matrix(
             (np.ones(tgt.size), (tgt, np.arange(tgt.size))), shape=(self.ncoef, tgt.size)
         )

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
 from pinflex.trajectory.ik import absolute_to_relative, planar_2r_fk, planar_2r_ik
 from pinflex.trajectory.paths import WorkspacePath, _parse_pieces, _timing, workspace_path
@@ -89,6 +88,8 @@ def benchmark_a_path(n_samples: int = 152, duration_s: float = 1.51) -> Workspac
         start, segments, s_p0 = _benchmark_a_pieces(x_pick)
         lengths = [p.length for p in _parse_pieces(start, segments)]
         return s_p0 / sum(lengths) - target
+
+    from scipy.optimize import brentq
 
     x_pick = brentq(mismatch, -0.15, 0.05, xtol=1e-16, rtol=1e-15)
     start, segments, _ = _benchmark_a_pieces(x_pick)
