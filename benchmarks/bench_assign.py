@@ -17,29 +17,26 @@ import numpy as np
 
 from pinflex.assignment import (
     Target,
-    assign_frequencies,
     brute_force,
     build_assignment,
     exact_cost,
     solve_assignment_qp,
     solve_assignment_qp_scipy,
 )
-from pinflex.assignment.study import user_trajectory
-from pinflex.erls import FlexibleModel
+from pinflex.assignment.benchmark_a import Q0, assign_mode1, benchmark_model, benchmark_trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
-Q0 = np.array([1.817, 5.312])
 
 
 def main():
     """Run the benchmark."""
     warnings.simplefilter("ignore")
-    model = FlexibleModel(ROOT / "urdf" / "two_link.urdf", planar=True)
-    traj = user_trajectory(model, "benchmark_a")
+    model = benchmark_model()
+    traj = benchmark_trajectory(model)
     target = [Target(1, 190.0)]
     runs = []
     for _ in range(5):
-        r = assign_frequencies(model, traj, target, q0=Q0)
+        r = assign_mode1(model, traj, report_modes=())
         runs.append(r.timings_s)
     best = {k: min(t[k] for t in runs) for k in runs[0]}
     stages = ", ".join(f"{k} {1e3 * v:.1f}" for k, v in best.items())

@@ -23,13 +23,17 @@ import numpy as np
 import scipy.linalg
 from timing import best_of
 
-from pinflex.assignment.study import user_trajectory
-from pinflex.erls import FlexibleModel
+from pinflex.assignment.benchmark_a import (
+    PAPER,
+    Q0,
+    benchmark_model,
+    benchmark_trajectory,
+    expand_mode1,
+    taylor_errors,
+)
 from pinflex.parametric import expand, sample
 
 ROOT = Path(__file__).resolve().parents[1]
-Q0 = np.array([1.817, 5.312])
-PAPER = {("traj", False): 0.09, ("traj", True): 1.64, ("y", False): 0.05, ("y", True): 1.34}
 
 
 def main():
@@ -38,29 +42,23 @@ def main():
     parser.add_argument("--out", default=str(ROOT / "docs"), help="folder of the chart")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
-    model = FlexibleModel(ROOT / "urdf" / "two_link.urdf", planar=True)
-    traj = user_trajectory(model, "benchmark_a")
+    model = benchmark_model()
+    traj = benchmark_trajectory(model)
     Q = traj.q
     y0 = model.y0
     elbow = Q[:, 1] - Q[:, 0]
     print(f"trajectory: {len(Q)} samples, elbow angle q2 - q1 in [{elbow.min():.4f}, "
           f"{elbow.max():.4f}] rad, q0 at sample {int(np.argmin(np.abs(Q - Q0).sum(1)))}")
-    grid = np.linspace(0, 0.25, 26)
-    Yg = np.array([[a, b] for a in grid for b in grid])
-    Qg = np.tile(Q0, (len(Yg), 1))
     f_traj = model.frequencies(Q, np.zeros(2), n_modes=1)[:, 0]
-    f_grid = model.frequencies(Qg, Yg, n_modes=1)[:, 0]
-    tm = expand(model, Q0, y0, order=4)
+    tm = expand_mode1(model)
     print("\nmode 1, p = 4, largest relative error [%]      full   (paper)   lin. in y   (paper)")
     for quantity in ("freq_hz", "eigval"):
-        for key, QQ, YY, ex in (("traj", Q, np.zeros(2), f_traj), ("y", Qg, Yg, f_grid)):
-            ref = ex if quantity == "freq_hz" else (2 * np.pi * ex) ** 2
-            e = [100 * np.max(np.abs(tm.evaluate(QQ, YY, quantity=quantity,
-                                                 linear_in_design=lin)[:, 0] / ref - 1))
-                 for lin in (False, True)]
+        errs = taylor_errors(model, traj, tm, quantity=quantity)
+        for key in ("traj", "y"):
+            e = [errs[f"taylor_{key}_full"], errs[f"taylor_{key}_lin"]]
             label = ("trajectory, y = 0" if key == "traj" else "q0, y in [0, .25]^2")
-            print(f"  {quantity:8s} {label:30s} {e[0]:8.4f} ({PAPER[(key, False)]:5.2f})"
-                  f"  {e[1]:9.4f}   ({PAPER[(key, True)]:5.2f})")
+            print(f"  {quantity:8s} {label:30s} {e[0]:8.4f} ({PAPER[f'taylor_{key}_full']:5.2f})"
+                  f"  {e[1]:9.4f}   ({PAPER[f'taylor_{key}_lin']:5.2f})")
 
     # speed and accuracy against order, joints expanded only (design fixed at y = 0)
     t_exact = best_of(lambda: model.frequencies(Q, np.zeros(2), n_modes=1))
