@@ -40,7 +40,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from pinflex import beam
-from pinflex.erls.terms import _offset_block
+from pinflex.erls.terms import offset_block
 from pinflex.exceptions import EigenSolverError
 from pinflex.linalg import rotate_twist, translate_twist
 
@@ -80,8 +80,8 @@ class SolvePlan:
     """Everything constant of the conditioned solve of one model (built once, cached)."""
 
     cores: dict
-    joint_attach: tuple  # per model._joints entry
-    pm_attach: tuple  # per model._point_masses entry
+    joint_attach: tuple  # per model.plan.joints entry
+    pm_attach: tuple  # per model.plan.point_masses entry
     nx: int
     nv: int
 
@@ -93,7 +93,7 @@ def supported(model) -> bool:
     design variables that change the beams (sections, materials) go through the nodal pencil.
     """
     plain = bool(getattr(model, "_joints_plain", True))
-    masses = all(d.name in model._pm_values for d in model.design)
+    masses = all(d.name in model.point_mass_values for d in model.design)
     return plain and masses and model.nx > 0
 
 
@@ -109,7 +109,7 @@ def solve_plan(model) -> SolvePlan:
         return cached
     cores = {}
     nx = model.nx
-    for link, p in model._flex.items():
+    for link, p in model.plan.beams.items():
         spec = p.spec
         n = spec.elements
         le = spec.length_m / n
@@ -151,8 +151,8 @@ def solve_plan(model) -> SolvePlan:
             link, start, start + o, C, R, H[:o, :o], H[:o, o : o + 6], H[:o, o + 6 :],
             H[o : o + 6, o : o + 6], H[o : o + 6, o + 6 :], H[o + 6 :, o + 6 :], rows[r:],
         )
-    joint_attach = tuple(_attach(model, cores, j.parent, j.xyz) for j in model._joints)
-    pm_attach = tuple(_attach(model, cores, p[1], p[2]) for p in model._point_masses)
+    joint_attach = tuple(_attach(model, cores, j.parent, j.xyz) for j in model.plan.joints)
+    pm_attach = tuple(_attach(model, cores, p.link, p.xyz) for p in model.plan.point_masses)
     plan = SolvePlan(cores, joint_attach, pm_attach, nx, model.nv)
     model.__dict__["_solve_plan"] = plan
     return plan
@@ -173,7 +173,7 @@ def _attach(model, cores, link: str, point: np.ndarray) -> _Attach:
     core = cores.get(link)
     if core is None:
         return _Attach(0, 0, None, translate_twist(point))
-    spec = model._flex[link].spec
+    spec = model.plan.beams[link].spec
     L, n = spec.length_m, spec.elements
     xdir = spec.tip / L
     s = float(np.clip(point @ xdir, 0.0, L))
@@ -227,14 +227,14 @@ def _twist_at(att: _Attach, root, alg, nx: int):
 def root_twists(model, plan: SolvePlan, terms, b: int, alg=None) -> dict:
     """Elastic twist of every link root (link axes) in solver coordinates, (b, 6, nx)."""
     alg = _algebra(alg, b)
-    twist = {model._order[0]: None}
-    for j, att in zip(model._joints, plan.joint_attach):
+    twist = {model.plan.root: None}
+    for j, att in zip(model.plan.joints, plan.joint_attach):
         tau = _twist_at(att, twist[j.parent], alg, plan.nx)
         if tau is None:
             twist[j.child] = None
             continue
         if j.kind == "prismatic":
-            tau = tau + alg.mm(_offset_block(terms.slide[j.name]), tau)
+            tau = tau + alg.mm(offset_block(terms.slide[j.name]), tau)
             rotated = rotate_twist(j.R_o.T) @ tau
         elif j.kind == "revolute":
             rotated = alg.mm(rotate_twist(np.swapaxes(terms.rot[j.name], -1, -2)), tau)
@@ -286,7 +286,7 @@ def mass(model, terms, y: np.ndarray, b: int, twist=None, *, alg=None, split=Fal
                 X = mm(epT, c.H_ev @ J)
                 M[:, :a, nx:] += X
                 M[:, nx:, :a] += np.swapaxes(X, -1, -2)
-    for link, inertia in model._inertias.items():
+    for link, inertia in model.plan.inertias.items():
         e = twist[link]
         J = terms.jac[link]
         g = np.zeros((lead, 6, nd))
@@ -296,7 +296,8 @@ def mass(model, terms, y: np.ndarray, b: int, twist=None, *, alg=None, split=Fal
         M += mm(np.swapaxes(g, -1, -2), inertia @ g)
     design_index = {d.name: i for i, d in enumerate(model.design)}
     Md = np.zeros((model.ny, lead, nd, nd)) if split else None
-    for (name, link, xyz, _), att in zip(model._point_masses, plan.pm_attach):
+    for (name, link, xyz), att in zip(((p.name, p.link, p.xyz) for p in model.plan.point_masses),
+                                     plan.pm_attach):
         design = name in design_index
         if design and split:
             value = None
@@ -305,7 +306,7 @@ def mass(model, terms, y: np.ndarray, b: int, twist=None, *, alg=None, split=Fal
             if not np.any(value):
                 continue
         else:
-            value = model._pm_values[name]
+            value = model.point_mass_values[name]
             if value == 0.0:
                 continue
         tau = _twist_at(att, twist[link], alg, nx)
