@@ -174,3 +174,28 @@ def test_reduced_basis_of_one_pose_is_detected(arm):
     assert one.static_error > 0.5
     assert three.static_error < 0.05
     assert three.nx == 12
+
+
+def test_prbdm_responses_against_closed_forms_and_the_linear_chain():
+    """Beam FE static tip compliance = L³/3EI; chain ABA step response = its linear modes."""
+    from pinflex.dynamics import prbdm as pd
+    from pinflex.prbdm import build_chain, uniform_beam
+
+    pl = uniform_beam()
+    E, L, w, t = 205e9, 1.0, 0.3624, 0.040532
+    EI = E * w * t**3 / 12.0
+    beam = pd.beam_linear(pl, 0.02)
+    assert abs(pd.receptance(beam, [0.0])[0]) == pytest.approx(L**3 / (3 * EI), rel=1e-9)
+    # Su's 3R PRBM (K_i = k_i EI / L)
+    chain = build_chain(pl, np.array([0.10, 0.35, 0.40, 0.15]),
+                        np.array([3.51, 2.99, 2.58]) * EI / L)
+    lin = pd.chain_linear(chain, 0.02)
+    f1 = np.sqrt(np.linalg.eigvals(np.linalg.solve(lin.M, lin.K)).real.min()) / (2 * np.pi)
+    times = np.linspace(0.0, 3.0 / f1, 400)
+    force = 0.001 / abs(pd.receptance(lin, [0.0])[0])  # 1 mm static: linear range
+    z_aba = pd.chain_step_response(chain, 0.02, force, times)
+    z_lin = pd.beam_step_response(lin, force, times)  # exact modal sum of the linear chain
+    assert np.abs(z_aba - z_lin).max() <= 2e-3 * np.abs(z_lin).max()
+    report = pd.compare(pl, chain, xi=0.02, periods=2.0)
+    assert len(report["peak_error"]) == 3 and report["static_error"] == pytest.approx(
+        abs(pd.receptance(lin, [0.0])[0]) * 3 * EI / L**3 - 1.0, rel=1e-9)
