@@ -79,3 +79,15 @@ def test_assignment_raises_a_frequency_with_diameters_under_a_link_mass_budget(r
     assert after.mean() > f_today.mean()
     # the linearised budget holds on the exact mass up to its curvature (ρ π L δd² / 4)
     assert design_mass(model, res.y) <= budget * (1 + 1e-2)
+
+
+def test_assignment_floor_along_the_motion_with_diameters(rods):
+    """A floor on mode 1 at every sample, section variables, held on the exact model."""
+    model, traj = rods
+    f_today = model.frequencies(traj.q, n_modes=1)[:, 0]
+    floor = 1.08 * f_today.min()
+    res = assign_frequencies(model, traj, [Target(1, floor)], floors=[(1, floor)], refine=True)
+    after = model.frequencies(traj.q, res.y, n_modes=1)[:, 0]
+    assert after.min() >= floor - 1e-6 * floor
+    assert res.floor_margin_hz is not None and res.floor_margin_hz >= -1e-6 * floor
+    assert res.joints == {"q1": "free", "q2": "free"}

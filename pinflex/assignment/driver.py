@@ -396,6 +396,12 @@ def assign_frequencies(
         problem, taylor, solution, y, after = p2, tm2, s2, y2, v2
         predicted = _predicted_error(problem, taylor, trajectory, targets, solution, kwargs)
         refinements += 1
+    if floors:
+        problem, taylor, solution, y, after, corrected_exact = _floors_kept_exactly(
+            model, trajectory, targets, build_kwargs, problem, taylor, solution, y, after,
+            (tgt, tmodes, modes, reference))
+        if corrected_exact:
+            floors_model = "taylor+exact"
     margin = floor_margins(model, Q, y, floors, reference) if floors else None
     bar.total = bar.done
     bar.close()
@@ -490,6 +496,41 @@ def _floors_on_exact(model, trajectory, targets, build_kwargs, problem, taylor, 
         stacklevel=3,
     )
     return problem, taylor, solution
+
+
+def _floors_kept_exactly(model, trajectory, targets, build_kwargs, problem, taylor, solution,
+                         y, after, verify_args):
+    """Re-solve with exact-corrected floors when only the polynomial meets them.
+
+    Section variables are where the partially linear model is least accurate: the floors are
+    shifted by the exact-minus-predicted offsets at the answer and the QP solved again.
+    """
+    Q = model.check_q(trajectory.q)
+    tgt, tmodes, modes, reference = verify_args
+    floors = list(build_kwargs["floors"])
+    quantity = build_kwargs.get("quantity", "freq_hz")
+    tol = 1e-9 * max(float(np.max(np.abs(np.asarray(f, dtype=float)))) for _, f in floors)
+    if floor_margins(model, Q, y, floors, reference) >= -tol:
+        return problem, taylor, solution, y, after, False
+    y_star, changed = y, False
+    for _ in range(6):
+        corrected = [(m, np.asarray(f) + 1e-6 * np.abs(np.asarray(f)))  # a hair of margin
+                     for m, f in _corrected_floors(model, Q, taylor, y_star, floors, quantity,
+                                                   reference)]
+        kwargs = dict(build_kwargs, floors=corrected, taylor=taylor)
+        p3, tm3 = build_assignment(model, trajectory, targets, **kwargs)
+        try:
+            s3 = solve_assignment_qp(p3)
+        except AssignmentInfeasible:
+            break
+        problem, taylor, solution, y = p3, tm3, s3, _design_from(model, tm3, s3.dy)
+        changed = True
+        if floor_margins(model, Q, y, floors, reference) >= -tol:
+            break
+        y_star = y
+    if changed:
+        after = verify_tracked(model, Q, y, tgt, tmodes, modes, reference)
+    return problem, taylor, solution, y, after, changed
 
 
 def _corrected_floors(model, Q, taylor, y_star, floors, quantity, reference):
