@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 import time
+from typing import Any
 
 
 def add_parser(sub) -> None:
@@ -23,7 +24,7 @@ def add_parser(sub) -> None:
     p.set_defaults(func=cmd_simulate)
 
 
-def run_study(path) -> tuple[list, list, object, object]:
+def run_study(path) -> tuple[list, list, Any, Any]:
     """Assign the study's design, then simulate the baseline and the assigned design.
 
     Returns:
@@ -60,15 +61,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             write_text(p, rep.to_json(series=True), "simulation JSON")
             files.append(str(p))
         if args.exaggeration > 0:
+            playback: Any = None
             try:
-                from pinflex.visualization.playback import simulation_playback_html
-            except ImportError:
-                simulation_playback_html = None
-            if simulation_playback_html is not None:
+                from pinflex.visualization.playback import simulation_playback_html as playback
+            except ImportError:  # the preview extra (meshcat) is not installed
+                pass
+            if playback is not None:
                 for rep, (sim, dyn) in zip(reports, sims):
-                    files.append(str(simulation_playback_html(
-                        dyn, sim, out / f"{rep.name}_playback.html",
-                        exaggeration=args.exaggeration)))
+                    files.append(str(playback(dyn, sim, out / f"{rep.name}_playback.html",
+                                              exaggeration=args.exaggeration)))
     designs = []
     for rep in reports:
         d = rep.summary()

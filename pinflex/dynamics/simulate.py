@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -174,7 +175,7 @@ class PrescribedSystem:
         d, nx = self.damping, self.nx
         if d.kind == "rayleigh":
             return d.alpha * M[:nx, :nx] + d.beta * K[:nx, :nx]
-        if d.kind == "modal":
+        if d.kind == "modal" and self._Dmodal is not None:
             return self._Dmodal
         return np.zeros((nx, nx))
 
@@ -256,7 +257,7 @@ class _ReducedSystem:
                              c.A @ P, c.full)
 
     def state_matrix(self, c: _Coefficients):
-        return PrescribedSystem.state_matrix(self, c)
+        return PrescribedSystem.state_matrix(self, c)  # type: ignore[arg-type]  # same fields
 
 
 @dataclass
@@ -355,7 +356,7 @@ def simulate_prescribed(
     if dyn.nx == 0:
         raise SimulationError("the model has no flexible link: nothing vibrates")
     tic = time.perf_counter()
-    system = PrescribedSystem(dyn, motion, damping)
+    system: Any = PrescribedSystem(dyn, motion, damping)
     if modes is not None:
         system = _ReducedSystem(system, int(modes), int(basis_poses))
     nx = system.nx
@@ -382,6 +383,7 @@ def simulate_prescribed(
             return (v[:nx2].reshape(nx, nx), v[nx2 : 2 * nx2].reshape(nx, nx),
                     v[2 * nx2 : 3 * nx2].reshape(nx, nx), v[3 * nx2 :])
 
+    run1: Any
     if method == "newmark":
         run1 = newmark(coeff, motion.t0, motion.t1, x0, np.zeros(nx), rtol=rtol, atol=atol,
                        h0=min(1.0 / sample_hz, motion.duration_s / 10), rho_inf=rho_inf)

@@ -142,7 +142,7 @@ def parse_simulation_table(table) -> SimulationSettings:
             if kind == "modal" and ({"alpha", "beta"} & set(d)):
                 problems.append("damping.alpha and beta belong to kind = 'rayleigh'")
             if not problems:
-                out["damping"] = Damping(kind, float(d.get("alpha", 0.0)),
+                out["damping"] = Damping(str(kind), float(d.get("alpha", 0.0)),
                                          float(d.get("beta", 0.0)), tuple(map(float, ratios)))
         else:
             problems.append(f"damping = {d!r} must be 'none' or a table with kind = ...")

@@ -157,7 +157,7 @@ class ErlsDynamics:
         S = p.X @ JL
         wx = skew(JL[3:].T)  # (nv, 3, 3): [ω]× per unit joint velocity
         Gk = np.einsum("kab,nbx->knax", wx, E)
-        if edl is not None:
+        if edl is not None and p.D is not None:
             Gk = Gk + np.einsum("nab,kbx->knax", p.D, edl)
         Sdk = np.einsum("nab,kbj->knaj", p.X, Jd[p.link]) + np.einsum("kab,nbj->knaj", wx, S)
         return np.concatenate([E, S], axis=-1), Gk, Sdk, S, wx
