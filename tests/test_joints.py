@@ -289,3 +289,16 @@ def test_locked_mode_preview_names_the_joint_condition():
     assert "joints locked" in preview.caption
     _, f_ref = planar_two_link_frequencies(Q0, 0.125, 0.125, joints=["clamped"] * 2)
     assert preview.info["freq_hz"] == pytest.approx(f_ref[0], rel=1e-9)
+
+
+def test_a_spring_too_stiff_for_the_eigensolver_warns():
+    """1e12 N m/rad on benchmark A loses digits: a warning points to the lock; 1e8 does not."""
+    import warnings
+
+    from pinflex.exceptions import PinflexWarning
+
+    with pytest.warns(PinflexWarning, match="locked"):
+        _bench({"q2": 1e12})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PinflexWarning)
+        _bench({"q2": 1e8})

@@ -152,6 +152,7 @@ def setup(model, joints) -> None:
         (by_col[i], c.stiffness) for i, c in enumerate(conds) if c.kind == "spring"
     )
     model._locked_joints = tuple(by_col[i] for i in locked)
+    _check_spring_scale(model)
     C = model.coord_map
     if locked:
         CLL = C[np.ix_(locked, locked)]
@@ -177,6 +178,38 @@ def setup(model, joints) -> None:
         W = (C @ Tq)[kept]
         if not np.allclose(W, np.eye(len(kept)), rtol=0.0, atol=1e-14):
             model._modal_Winv = np.linalg.inv(W)
+
+
+#: A spring stiffer than this multiple of the stiffest beam element's own stiffness loses
+#: digits in the eigensolution (the pencil's condition number grows with k).
+STIFF_SPRING_RATIO = 1e6
+
+
+def _check_spring_scale(model) -> None:
+    """Warn when a spring is so stiff that the eigenvalues lose digits (use a lock)."""
+    if not model._spring_joints or not model.plan.beams:
+        return
+    scale = 0.0
+    for plan in model.plan.beams.values():
+        spec = plan.spec
+        le = spec.length_m / spec.elements
+        sec = spec.section
+        rot = spec.E * max(sec.Iy, sec.Iz) / le  # bending [N m/rad]
+        ax = spec.E * sec.A / le  # axial [N/m]
+        scale = max(scale, rot, ax * 1e-6)
+    for j, k in model._spring_joints:
+        ref = scale if j.kind == "revolute" else scale * 1e6
+        if k > STIFF_SPRING_RATIO * ref:
+            import warnings
+
+            from pinflex.exceptions import PinflexWarning
+
+            warnings.warn(
+                f"joint '{j.name}': stiffness {k:.3g} is {k / ref:.2g} times the stiffest beam "
+                "element's; the eigenvalues lose about that many digits of accuracy. For a "
+                "rigid joint use locked=\"true\" (joints='locked'), its exact limit",
+                PinflexWarning, stacklevel=4,
+            )
 
 
 def parent_rows(model, terms, alg, twist, joints_) -> np.ndarray:
