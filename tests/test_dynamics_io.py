@@ -62,7 +62,7 @@ def test_joint_springs_enter_the_stiffness():
         ErlsDynamics(FlexibleModel(URDF / "two_link.urdf", planar=True, joints="locked"))
 
 
-def test_frf_from_modes_equals_the_direct_solve(arm):
+def test_frf_from_modes_equals_the_direct_solve(arm, tmp_path):
     """Modal receptance = (K − ω²M + iωC)⁻¹ at sampled ω, free and locked joints."""
     dyn = ErlsDynamics(arm, y=[0.1, 0.05])
     q = np.array([1.8, 5.3])
@@ -76,6 +76,10 @@ def test_frf_from_modes_equals_the_direct_solve(arm):
         lp = linear_pose(dyn, q, inputs, [tip], damping=damping, joints=joints)
         Hm, Hd = frf(lp, freqs), frf_direct(lp, freqs)
         assert np.abs(Hm - Hd).max() <= 1e-9 * np.abs(Hd).max()
+    from pinflex.dynamics.charts import bode_chart
+
+    png = bode_chart(freqs, Hm[:, 0, :].T, ["force"], tmp_path / "bode.png", title="tip")
+    assert png.stat().st_size > 1000
     with pytest.raises(ConfigurationError):
         linear_pose(dyn, q, [("torque", "q1")], [tip], joints="locked")
 
