@@ -124,12 +124,23 @@ class PrescribedSystem:
         self.damping = damping or Damping()
         self.nx, self.nv = dyn.nx, dyn.nv
         self._Dmodal = None
+        self._cache: dict = {}
         if self.damping.kind == "modal":
             c = self.coefficients(motion.t1 + 1.0, damped=False)
             self._Dmodal = modal_damping_matrix(c.M, c.K, self.damping.ratios)
 
     def coefficients(self, t: float, *, damped: bool = True) -> _Coefficients:
-        """Exact coefficients of the projected system at time ``t`` [s]."""
+        """Exact coefficients of the projected system at time ``t`` [s] (cached by time)."""
+        key = (float(t), bool(damped))
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        out = self._coefficients(t, damped)
+        if len(self._cache) < 20000:
+            self._cache[key] = out
+        return out
+
+    def _coefficients(self, t: float, damped: bool) -> _Coefficients:
         dyn, nx = self.dyn, self.nx
         q, qd, qdd = self.motion(t)
         M, Ck, K, F = dyn.linear_terms(q)
@@ -376,10 +387,13 @@ def simulate_prescribed(
         nx2 = nx * nx
         packed = np.stack([np.concatenate([c.M.ravel(), c.C.ravel(), c.K.ravel(), c.f])
                            for c in cs])
-        spline = CubicSpline(grid, packed, axis=0)
+        pc = CubicSpline(grid, packed, axis=0).c  # (4, n - 1, ncol) piecewise cubics
 
         def coeff(t):
-            v = spline(min(max(t, grid[0]), grid[-1]))
+            t = min(max(t, grid[0]), grid[-1])
+            k = min(max(int(np.searchsorted(grid, t, side="right")) - 1, 0), grid.size - 2)
+            d = t - grid[k]
+            v = ((pc[0, k] * d + pc[1, k]) * d + pc[2, k]) * d + pc[3, k]
             return (v[:nx2].reshape(nx, nx), v[nx2 : 2 * nx2].reshape(nx, nx),
                     v[2 * nx2 : 3 * nx2].reshape(nx, nx), v[3 * nx2 :])
 
