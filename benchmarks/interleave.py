@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import time
 
-import numpy as np
+# no NumPy import at module level: pin_single_thread() must run before NumPy loads its BLAS
 
 
 def blas_threads() -> str:
@@ -16,7 +16,15 @@ def blas_threads() -> str:
 
 
 def pin_single_thread() -> None:
-    """Ask for single-thread BLAS unless the caller set a count (call before importing numpy)."""
+    """Ask for single-thread BLAS unless the caller set a count (call before importing numpy).
+
+    Raises:
+        RuntimeError: NumPy is already imported (the setting would not take effect).
+    """
+    import sys
+
+    if "numpy" in sys.modules:
+        raise RuntimeError("pin_single_thread() must run before NumPy is imported")
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(name, "1")
 
@@ -34,6 +42,8 @@ def interleaved(sides: dict, rounds: int = 7, number: int = 1) -> dict:
     The order of the sides alternates between rounds so that neither always runs first.
     Returns ``{name: array of per-round times}``.
     """
+    import numpy as np
+
     names = list(sides)
     out = {n: [] for n in names}
     for fn in sides.values():  # warm-up (caches, lazy set-up)
@@ -46,6 +56,8 @@ def interleaved(sides: dict, rounds: int = 7, number: int = 1) -> dict:
 
 def ratio_stats(num: np.ndarray, den: np.ndarray) -> dict:
     """Median and range of the per-round ratios ``num / den``, and the median times [s]."""
+    import numpy as np
+
     r = num / den
     return {
         "ratio_median": float(np.median(r)),
