@@ -54,7 +54,7 @@ def interleaved(sides: dict, rounds: int = 7, number: int = 1) -> dict:
     return {n: np.asarray(v) for n, v in out.items()}
 
 
-def ratio_stats(num: np.ndarray, den: np.ndarray) -> dict:
+def ratio_stats(num, den) -> dict:
     """Median and range of the per-round ratios ``num / den``, and the median times [s]."""
     import numpy as np
 

@@ -209,7 +209,7 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
     terms = model.pose_terms(q[None])
     plan = solve.solve_plan(model)
     twist = solve.root_twists(model, plan, terms, 1)
-    M = solve.mass(model, terms, y, 1, twist)[0]
+    M = solve.mass(model, terms, y, 1)[0]
 
     def pencil():
         Mx, Kx = model.matrices_from_terms(terms, y, 1)

@@ -244,7 +244,72 @@ def root_twists(model, plan: SolvePlan, terms, b: int, alg=None) -> dict:
     return twist
 
 
-def mass(model, terms, y: np.ndarray, b: int, twist=None, *, alg=None, split=False):
+def _lift(alg, C: np.ndarray) -> np.ndarray:
+    """A constant matrix on the leading axis of ``alg``."""
+    if alg.const_at == 0:
+        out = np.zeros((alg.size,) + C.shape)
+        out[0] = C
+        return out
+    return np.broadcast_to(C, (alg.size,) + C.shape)
+
+
+def factored_twists(model, plan: SolvePlan, terms, alg):
+    """Root twists as ``(T, source)``: twist = T (lead, 6, 6) @ sources[source] (lead, 6, nx).
+
+    A source is the elastic twist at a joint's attachment on a flexible link; every link
+    behind it through rigid links shares it, so the pose-dependent products of those links are
+    6 × 6 and the wide ``(6, nx)`` factor enters once per source (composite-inertia idea).
+
+    Returns:
+        ``(twists, sources)``: ``twists[link]`` is None (no elastic motion) or ``(T, k)``;
+        ``sources[k] = (tau, stop)`` with ``tau`` (lead, 6, stop) on the columns it can touch.
+    """
+    mm = alg.mm
+    twists = {model.plan.root: None}
+    sources = []
+    for j, att in zip(model.plan.joints, plan.joint_attach):
+        par = twists[j.parent]
+        core = plan.cores.get(j.parent)
+        if core is not None:
+            e_par = None if par is None else explicit_twist(par, sources, alg, core.start)
+            if e_par is not None:
+                e_full = np.zeros((alg.size, 6, plan.nx))
+                e_full[:, :, : e_par.shape[-1]] = e_par
+                e_par = e_full
+            tau = _twist_at(att, e_par, alg, plan.nx)
+            if tau is None:
+                twists[j.child] = None
+                continue
+            sources.append((np.ascontiguousarray(tau[:, :, : core.stop]), core.stop))
+            T_in = None
+            src = len(sources) - 1
+        else:
+            if par is None:
+                twists[j.child] = None
+                continue
+            T_par, src = par
+            T_in = att.lin @ T_par
+        if j.kind == "prismatic":
+            step = _lift(alg, np.eye(6)) + offset_block(terms.slide[j.name])
+            step = j.proj @ rotate_twist(j.R_o.T) @ step
+        elif j.kind == "revolute":
+            step = j.proj @ rotate_twist(np.swapaxes(terms.rot[j.name], -1, -2))
+        else:
+            step = _lift(alg, j.proj @ rotate_twist(j.R_o.T))
+        twists[j.child] = (step if T_in is None else mm(step, T_in), src)
+    return twists, sources
+
+
+def explicit_twist(tw, sources, alg, stop: int | None = None):
+    """``T @ tau`` of a factored twist on its first ``stop`` columns (None: all it has)."""
+    T, k = tw
+    tau, width = sources[k]
+    if stop is not None and stop < width:
+        tau = tau[:, :, :stop]
+    return alg.mm(T, tau)
+
+
+def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
     """Mass matrix (b, ndof, ndof) in solver coordinates ``[w; q]`` (stiffness: ``I`` on w).
 
     Args:
@@ -252,7 +317,6 @@ def mass(model, terms, y: np.ndarray, b: int, twist=None, *, alg=None, split=Fal
         terms: Pose terms of ``b`` poses (or their jets, with ``alg``).
         y: Checked design values (ny,) or (b, ny) (unused with ``split``).
         b: Number of poses.
-        twist: Root twists from :func:`root_twists` when the caller has them.
         alg: A jet algebra to assemble Taylor coefficients instead of poses.
         split: Return ``(M0, Mdesign)``: the mass without design point masses and the mass
             per unit design value, (ny, lead, nd, nd).
@@ -262,65 +326,99 @@ def mass(model, terms, y: np.ndarray, b: int, twist=None, *, alg=None, split=Fal
     mm, c0, lead = alg.mm, alg.const_at, alg.size
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
-    if twist is None:
-        twist = root_twists(model, plan, terms, b, alg)
+    twists, sources = factored_twists(model, plan, terms, alg)
     M = np.zeros((lead, nd, nd))
+    Md = np.zeros((model.ny, lead, nd, nd)) if split else None
     for link, c in plan.cores.items():
         a, z = c.start, c.stop
         J = terms.jac[link]
-        e = twist[link]
         M[c0, a:z, a:z] += c.H_oo
         if nv:
             X = c.H_ov @ J
             M[:, a:z, nx:] += X
             M[:, nx:, a:z] += np.swapaxes(X, -1, -2)
             M[:, nx:, nx:] += mm(np.swapaxes(J, -1, -2), c.H_vv @ J)
-        if e is not None:
-            ep = e[:, :, :a]  # a root twist only depends on upstream links' coordinates
+        if twists[link] is not None:
+            ep = explicit_twist(twists[link], sources, alg, a)  # upstream columns only
+            a = ep.shape[-1]
             X = c.H_oe @ ep
-            M[:, a:z, :a] += X
-            M[:, :a, a:z] += np.swapaxes(X, -1, -2)
+            M[:, c.start : z, :a] += X
+            M[:, :a, c.start : z] += np.swapaxes(X, -1, -2)
             epT = np.swapaxes(ep, -1, -2)
             M[:, :a, :a] += mm(epT, c.H_ee @ ep)
             if nv:
                 X = mm(epT, c.H_ev @ J)
                 M[:, :a, nx:] += X
                 M[:, nx:, :a] += np.swapaxes(X, -1, -2)
+    # rigid carriers: composite 6 × 6 (and 6 × nv) blocks per source, one wide product each
+    comp = {}
+
+    def add_rigid(slot, link, G, GJ, W):
+        """Carrier motion = G @ root twist + GJ @ q̇ (rows: 6 for an inertia, 3 for a mass).
+
+        ``slot`` is -1 for M, or the design index whose Md the carrier goes to.
+        """
+        target = M if slot < 0 else Md[slot]
+        if nv:
+            target[:, nx:, nx:] += mm(np.swapaxes(GJ, -1, -2), W @ GJ)
+        tw = twists[link]
+        if tw is None:
+            return
+        T, k = tw
+        GT = G @ T if G is not None else T
+        key = (k, slot)
+        C, D = comp.get(key, (0.0, 0.0))
+        C = C + mm(np.swapaxes(GT, -1, -2), W @ GT)
+        if nv:
+            D = D + mm(np.swapaxes(GT, -1, -2), W @ GJ)
+        comp[key] = (C, D)
+
     for link, inertia in model.plan.inertias.items():
-        e = twist[link]
-        J = terms.jac[link]
-        g = np.zeros((lead, 6, nd))
-        if e is not None:
-            g[:, :, :nx] = e
-        g[:, :, nx:] = J
-        M += mm(np.swapaxes(g, -1, -2), inertia @ g)
-    design_index = {d.name: i for i, d in enumerate(model.design)}
-    Md = np.zeros((model.ny, lead, nd, nd)) if split else None
-    for (name, link, xyz), att in zip(((p.name, p.link, p.xyz) for p in model.plan.point_masses),
-                                     plan.pm_attach):
+        add_rigid(-1, link, None, terms.jac[link], inertia)
+    design_index = getattr(model, "_mass_design_index", None)
+    if design_index is None:
+        design_index = {d.name: i for i, d in enumerate(model.design)}
+    eye3 = np.eye(3)
+    for pm, att in zip(model.plan.point_masses, plan.pm_attach):
+        name, link, xyz = pm.name, pm.link, pm.xyz
         design = name in design_index
         if design and split:
-            value = None
+            value, slot = 1.0, design_index[name]
         elif design:
             value = np.broadcast_to(np.asarray(y[..., design_index[name]], float), (lead,))
             if not np.any(value):
                 continue
+            value, slot = value[:, None, None] * eye3, -1
         else:
-            value = model.point_mass_values[name]
+            value, slot = model.point_mass_values[name], -1
             if value == 0.0:
                 continue
-        tau = _twist_at(att, twist[link], alg, nx)
-        g = np.zeros((lead, 3, nd))
-        if tau is not None:
-            g[:, :, :nx] = tau[:, :3]
-        g[:, :, nx:] = (translate_twist(xyz) @ terms.jac[link])[:, :3]
-        m = mm(np.swapaxes(g, -1, -2), g)
-        if value is None:
-            Md[design_index[name]] = m
-        elif np.ndim(value):
-            M += value[:, None, None] * m
+        target = M if slot < 0 else Md[slot]
+        gJ = (translate_twist(xyz) @ terms.jac[link])[:, :3]
+        W = value * eye3 if np.ndim(value) == 0 else value
+        if link in plan.cores:  # on a beam: its own coordinates and the root twist, explicit
+            e = None if twists[link] is None else explicit_twist(twists[link], sources, alg)
+            e_full = None
+            if e is not None:
+                e_full = np.zeros((lead, 6, nx))
+                e_full[:, :, : e.shape[-1]] = e
+            tau = _twist_at(att, e_full, alg, nx)
+            g = np.zeros((lead, 3, nd))
+            if tau is not None:
+                g[:, :, :nx] = tau[:, :3]
+            g[:, :, nx:] = gJ
+            target += mm(np.swapaxes(g, -1, -2), W @ g)
         else:
-            M += value * m
+            add_rigid(slot, link, translate_twist(xyz)[:3], gJ, W)
+    for (k, slot), (C, D) in comp.items():
+        target = M if slot < 0 else Md[slot]
+        tau, w = sources[k]
+        tT = np.swapaxes(tau, -1, -2)
+        target[:, :w, :w] += mm(tT, mm(C, tau))
+        if nv:
+            X = mm(tT, D)
+            target[:, :w, nx:] += X
+            target[:, nx:, :w] += np.swapaxes(X, -1, -2)
     return (M, Md) if split else M
 
 

@@ -12,13 +12,73 @@ of coordinates, so their Taylor coefficients are the same.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 
 import numpy as np
+import scipy.sparse as sp
 
 from pinflex.erls import FlexibleModel, solve
 from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
 from pinflex.jets import JetSpace
-from pinflex.parametric.matrices import JetAlgebra, pose_jets
+from pinflex.parametric.matrices import pose_jets
+
+
+@lru_cache(maxsize=16)
+def _lookup(space: JetSpace):
+    """Position of every multi-index by its base-(p+1) code, and the codes of the space."""
+    base = space.order + 1
+    weights = base ** np.arange(space.nvars, dtype=np.int64)
+    codes = space.multi_indices @ weights
+    table = np.full(base**space.nvars, -1, dtype=np.int64)
+    table[codes] = np.arange(space.ncoef)
+    return table, codes
+
+
+class SparseJetAlgebra:
+    """Jet algebra whose products skip coefficients that are zero.
+
+    The factors of the assembly depend on few joints each (a link's root twist only on the
+    joints upstream of it), so most of their Taylor coefficients vanish; the truncated product
+    multiplies only the nonzero ones, one GEMM per degree of the left factor, and scatters the
+    pairs into their target coefficients. Exact: the same sums as :func:`pinflex.jets.matmul`.
+    """
+
+    def __init__(self, space: JetSpace):
+        self.space = space
+
+    def const(self, c: np.ndarray) -> np.ndarray:
+        """Jet of a constant array."""
+        out = np.zeros((self.space.ncoef,) + np.shape(c))
+        out[0] = c
+        return out
+
+    def mm(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Truncated product of two matrix jets (ncoef, n, m) @ (ncoef, m, r)."""
+        space = self.space
+        nc, n, m = a.shape
+        r = b.shape[2]
+        deg = space.degrees
+        table, codes = _lookup(space)
+        nz_a = np.flatnonzero(np.any(a.reshape(nc, -1) != 0.0, axis=1))
+        nz_b = np.flatnonzero(np.any(b.reshape(nc, -1) != 0.0, axis=1))
+        parts, targets = [], []
+        for d in np.unique(deg[nz_a]):
+            la = nz_a[deg[nz_a] == d]
+            rb = nz_b[deg[nz_b] <= space.order - d]
+            if not rb.size:
+                continue
+            lhs = a[la].reshape(la.size * n, m)
+            rhs = b[rb].transpose(1, 0, 2).reshape(m, rb.size * r)
+            prod = (lhs @ rhs).reshape(la.size, n, rb.size, r).transpose(0, 2, 1, 3)
+            parts.append(prod.reshape(-1, n * r))
+            targets.append(table[(codes[la][:, None] + codes[rb][None, :]).ravel()])
+        out = np.zeros((nc, n * r))
+        if parts:
+            tgt = np.concatenate(targets)
+            scatter = sp.csr_matrix((np.ones(tgt.size), (tgt, np.arange(tgt.size))),
+                                    shape=(nc, tgt.size))
+            out = np.asarray(scatter @ np.concatenate(parts, axis=0))
+        return out.reshape(nc, n, r)
 
 
 def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
@@ -50,7 +110,7 @@ def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     if nj:
         qspace = JetSpace(nj, int(order))
         terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
-        Mq, Mdq = solve.mass(model, terms, y0, 1, alg=JetAlgebra(qspace), split=True)
+        Mq, Mdq = solve.mass(model, terms, y0, 1, alg=SparseJetAlgebra(qspace), split=True)
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:
         Mq, Mdq = solve.mass(model, model.pose_terms(q0[None]), y0, 1, split=True)
