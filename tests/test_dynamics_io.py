@@ -203,3 +203,36 @@ def test_prbdm_responses_against_closed_forms_and_the_linear_chain():
     report = pd.compare(pl, chain, xi=0.02, periods=2.0)
     assert len(report["peak_error"]) == 3 and report["static_error"] == pytest.approx(
         abs(pd.receptance(lin, [0.0])[0]) * 3 * EI / L**3 - 1.0, rel=1e-9)
+
+
+def test_slow_tip_force_gives_the_static_compliance(arm):
+    """A tip force ramped slowly on the held arm settles at the global FE's static deflection."""
+    from pinflex.dynamics import simulate_prescribed, vibration_report
+    from pinflex.trajectory import Trajectory
+
+    y = np.array([0.1, 0.05])
+    q = np.array([1.8, 5.3])
+    dyn = ErlsDynamics(arm, y=y)
+    T = 1.0
+
+    def force(t):
+        s = min(max(t / T, 0.0), 1.0)
+        return np.array([0.0, 2.0, 0.0]) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+
+    traj = Trajectory(np.linspace(0.0, T, 11), np.tile(q, (11, 1)))
+    sim = simulate_prescribed(dyn, traj, after_s=0.2, sample_hz=500.0,
+                              damping=Damping("modal", ratios=(0.05,)),
+                              forces=[("tool", (0, 0, 0), force)])
+    rep = vibration_report(dyn, sim, frame="tool")
+    K, M = ref.planar_two_link_matrices(q, *y)
+    n = K.shape[0]
+    keep = [i for i in range(n) if i not in (0, 13)]
+    Tm = np.zeros((n, n - 2))
+    for col, i in enumerate(keep):
+        Tm[i, col] = 1.0
+    Tm[13, keep.index(12)] = 1.0
+    f = np.zeros(n)
+    f[21] = 2.0
+    u = Tm @ np.linalg.solve(Tm.T @ K @ Tm, Tm.T @ f)
+    assert rep.deflection_m[-1, :2] == pytest.approx(u[[20, 21]], rel=1e-3,
+                                                     abs=1e-3 * abs(u[21]))

@@ -118,8 +118,10 @@ class PrescribedSystem:
         damping: Damping of the elastic motion.
     """
 
-    def __init__(self, dyn: ErlsDynamics, motion: JointMotion, damping: Damping | None = None):
+    def __init__(self, dyn: ErlsDynamics, motion: JointMotion, damping: Damping | None = None,
+                 forces=()):
         self.dyn = dyn
+        self.forces = [(dyn.frame_map(link, xyz), fn) for link, xyz, fn in forces]
         self.motion = motion
         self.damping = damping or Damping()
         self.nx, self.nv = dyn.nx, dyn.nv
@@ -155,6 +157,7 @@ class PrescribedSystem:
         CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
         KL = Z.T @ K @ Z
         rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
+        F = F + external_forces(self.forces, q, t)
         fL = Z.T @ (F - rigid)
         if damped:
             CL = CL + self._damping(M, K, ML, KL)
@@ -200,6 +203,19 @@ class PrescribedSystem:
         Abar[nx:, nx:] = -MiK[:, nx : 2 * nx]
         bbar = np.concatenate([np.zeros(nx), MiK[:, -1]])
         return Abar, bbar
+
+
+def external_forces(forces, q, t) -> np.ndarray:
+    """Generalized force of world forces ``fn(t)`` [N] at points of links (``frame_map``)."""
+    out = None
+    for at, fn in forces:
+        f = np.asarray(fn(t), dtype=float)
+        if f.shape != (3,) or not np.all(np.isfinite(f)):
+            raise ConfigurationError(f"an external force must give 3 finite numbers [N], got {f!r}")
+        Tw, Sw = at(q)
+        g = np.concatenate([Tw[:3].T @ f, Sw[:3].T @ f])
+        out = g if out is None else out + g
+    return 0.0 if out is None else out
 
 
 class _ReducedSystem:
@@ -331,6 +347,7 @@ def simulate_prescribed(
     rho_inf: float = 0.9,
     modes: int | None = None,
     basis_poses: int = 3,
+    forces=(),
 ) -> Simulation:
     """Kineto-elastodynamics: the joints follow ``trajectory``, the elastic coordinates respond.
 
@@ -356,6 +373,10 @@ def simulate_prescribed(
             ``modes`` lowest locked-joint modes of ``basis_poses`` poses along the motion
             (:class:`_ReducedSystem`); ``None`` keeps every elastic coordinate.
         basis_poses: Poses whose modes make the reduced basis (evenly spread in time).
+        forces: External forces ``[(link, xyz, fn), ...]``: ``fn(t)`` is a world force [N]
+            at the point ``xyz`` of ``link`` (it does work on the point's elastic and ERLS
+            motion); the coefficient grid samples it, so it should be smooth on the grid; after
+            the stop it keeps its value at the stop.
 
     The hold phase after the stop is a constant-coefficient system, propagated exactly by its
     modes at the output rate (:func:`_modal_hold`); its ``steps`` are the output samples.
@@ -367,7 +388,7 @@ def simulate_prescribed(
     if dyn.nx == 0:
         raise SimulationError("the model has no flexible link: nothing vibrates")
     tic = time.perf_counter()
-    system: Any = PrescribedSystem(dyn, motion, damping)
+    system: Any = PrescribedSystem(dyn, motion, damping, forces)
     if modes is not None:
         system = _ReducedSystem(system, int(modes), int(basis_poses))
     nx = system.nx
@@ -418,7 +439,7 @@ def simulate_prescribed(
         run1 = integrate(fun, jac, motion.t0, motion.t1, np.concatenate([x0, np.zeros(nx)]),
                          method=method, rtol=rtol, atol=atol_vec)
     # hold phase: constant coefficients at the final pose, exact propagation
-    cend = system.coefficients(motion.t1 + 1.0)
+    cend = system.coefficients(motion.t1)  # joints at rest there; forces frozen from here
     Aend, bend = system.state_matrix(cend)
     t_end = motion.t1 + after_s
     times = _times(motion.t0, t_end, sample_hz)
