@@ -91,7 +91,7 @@ def brute_force(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[
         raise ConfigurationError("brute force needs finite upper bounds on every design variable")
     if model.ny > 3:
         raise ConfigurationError("brute force is limited to three design variables")
-    best = {}
+    best: dict[str, tuple[np.ndarray, float]] = {}
     total = 0
     a, b = lo.copy(), hi.copy()
     spacing = (b - a) / (points - 1)

@@ -20,6 +20,7 @@ import csv
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -72,7 +73,7 @@ class AssignmentData:
         """Long format: one row per sample and mode."""
         out = []
         for k in range(self.times_s.size):
-            base = {"sample": k, "t": float(self.times_s[k])}
+            base: dict[str, Any] = {"sample": k, "t": float(self.times_s[k])}
             base.update({n: float(v) for n, v in zip(self.joint_names, self.q[k])})
             for c, m in enumerate(self.modes):
                 tgt = self.target_hz[k, c]
@@ -270,11 +271,11 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
     prob = result.problem
     first_user = 1 if budget is not None else 0
     groups = list(prob.constraint_groups)
-    rows = [i for i, g in enumerate(groups) if g == "inequality"][first_user:]
-    for r, i in enumerate(rows):
+    ineq = [i for i, g in enumerate(groups) if g == "inequality"][first_user:]
+    for n_row, i in enumerate(ineq):
         value = float(prob.C[i] @ dy)
         slack = float(prob.u[i] - value)
-        constraints.append(dict(name=f"inequality[{r}]", kind="inequality", value=value,
+        constraints.append(dict(name=f"inequality[{n_row}]", kind="inequality", value=value,
                                 limit=float(prob.u[i]), slack=slack,
                                 active=_is_active(slack, max(abs(prob.u[i]), 1.0)),
                                 exact_slack=None, unit=""))

@@ -64,7 +64,9 @@ SWEEPABLE = ("robot", "planar", "trajectory.builtin", "trajectory.csv", "expansi
 
 def split_values(text: str) -> list[str]:
     """Split ``V1,V2,...`` on commas outside brackets and quotes."""
-    parts, depth, quote, current = [], 0, "", []
+    parts: list[str] = []
+    current: list[str] = []
+    depth, quote = 0, ""
     for ch in text:
         if quote:
             quote = "" if ch == quote else quote

@@ -25,6 +25,7 @@ from __future__ import annotations
 import hashlib
 import time
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -134,7 +135,7 @@ class PrbdmStudy:
                  "fit": {"n_joints": n, "n_modes": m, "objective": self.objective,
                          "n_starts": self.n_starts, "stiffness_law": self.stiffness_law,
                          "poses": self.poses}}
-                for n, m in zip(self.links, self.modes)]
+                for n, m in zip(self.links, self.modes or self.links)]
 
     def to_dict(self) -> dict:
         """Plain dictionary of the settings."""
@@ -221,7 +222,7 @@ def run_prbdm_beam(study: dict, seed: int, item: int,
     rows = []
     for chash, config in configs:
         fit_cfg = config["fit"]
-        row = {"seed": seed, "item": item, "config_hash": chash, "kind": KIND,
+        row: dict[str, Any] = {"seed": seed, "item": item, "config_hash": chash, "kind": KIND,
                "params": params, "truth": truth_json, "result": None, "metrics": {},
                "worker": worker, "status": "failed", "error": error}
         t0, c0 = time.perf_counter(), time.process_time()

@@ -92,6 +92,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     if args.html:
         print(f"wrote {write(args.html)}")
         return 0
+    vis = vis or served_visualizer()
     print(f"meshcat is serving the preview at {vis.url()}")
     try:
         if args.serve_seconds is None:

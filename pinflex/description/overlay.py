@@ -67,6 +67,7 @@ def apply_overlay(base_xml: str, overlay: ET.Element) -> str:
         raise InvalidDescription(f"the overlay's base URDF is not well-formed XML: {exc}") from exc
     for child in overlay:
         root_el.append(child)
-    if overlay.get("name"):
-        root_el.set("name", overlay.get("name"))
+    name = overlay.get("name")
+    if name:
+        root_el.set("name", name)
     return ET.tostring(root_el, encoding="unicode")

@@ -125,7 +125,7 @@ class PrescribedSystem:
         self.motion = motion
         self.damping = damping or Damping()
         self.nx, self.nv = dyn.nx, dyn.nv
-        self._Dmodal = None
+        self._Dmodal: np.ndarray | None = None
         self._cache: dict = {}
         if self.damping.kind == "modal":
             c = self.coefficients(motion.t1 + 1.0, damped=False)

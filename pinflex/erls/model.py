@@ -115,6 +115,20 @@ class FlexibleModel:
             coordinates eliminated) and ``n_rigid`` counts the free joints.
     """
 
+    # set by the joint-condition layout (pinflex.erls.joints.setup)
+    joint_conditions: tuple
+    kept_joints: tuple[str, ...]
+    n_rigid: int
+    _rigid_cols: np.ndarray
+    _elastic_cols: np.ndarray
+    _spring_joints: tuple
+    _locked_joints: tuple
+    _lock_T0: np.ndarray
+    _lock_inv: np.ndarray
+    _lock_rows: np.ndarray
+    _joints_plain: bool
+    _modal_Winv: np.ndarray | None
+
     def __init__(
         self,
         description: RobotDescription | str | Path,

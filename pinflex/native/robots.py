@@ -8,7 +8,7 @@ from pathlib import Path
 
 from pinflex.description import NAMESPACE, apply_overlay, parse, robot_data_dir
 from pinflex.exceptions import ConfigurationError, InvalidDescription, LinkNotFound
-from pinflex.native.spec import Beam, Mass, annotations
+from pinflex.native.spec import Beam, Mass, annotation_elements
 
 #: Fixed-base arms of example-robot-data by short name: path of the URDF under ``robots/``.
 EXAMPLE_ROBOTS: dict[str, str] = {
@@ -86,7 +86,7 @@ def model_from_urdf_text(
     from pinflex.erls import FlexibleModel
 
     flex, mass = _resolve_keys(urdf_xml, flexible, masses)
-    overlay = _overlay(annotations(flex, mass), name)
+    overlay = _overlay(annotation_elements(flex, mass), name)
     desc = parse(apply_overlay(urdf_xml, overlay), base_dir=base_dir)
     return FlexibleModel(desc, coordinates=coordinates, **_model_kwargs(joints, kwargs))
 

@@ -78,7 +78,7 @@ class Material:
             out["poisson"] = _num(self.poisson)
         if self.density is not None:
             out["density"] = _num(self.density)
-        else:
+        elif self.linear_density is not None:
             out["linear_density"] = _num(self.linear_density)
         return out
 
@@ -175,7 +175,7 @@ class Mass:
         return ET.Element(_NS + "point_mass", attrs)
 
 
-def annotations(
+def annotation_elements(
     flexible: dict[str, Beam] | None,
     masses: dict[str, Mass] | None,
     coordinates: str | None = None,
@@ -188,12 +188,12 @@ def annotations(
                 f"flexible['{link}'] must be a pinflex.Beam, got {type(spec).__name__}"
             )
         out.append(spec.element(link))
-    for name, spec in (masses or {}).items():
-        if not isinstance(spec, Mass):
+    for name, mass in (masses or {}).items():
+        if not isinstance(mass, Mass):
             raise InvalidDescription(
-                f"masses['{name}'] must be a pinflex.Mass, got {type(spec).__name__}"
+                f"masses['{name}'] must be a pinflex.Mass, got {type(mass).__name__}"
             )
-        out.append(spec.element(name))
+        out.append(mass.element(name))
     if coordinates is not None:
         out.append(ET.Element(_NS + "coordinates", {"convention": coordinates}))
     return out

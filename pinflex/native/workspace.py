@@ -15,11 +15,11 @@ URDF joint limits raise :class:`~pinflex.exceptions.JointLimitsExceeded` (or war
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from pinflex.exceptions import IKNotConverged, InvalidPath, LinkNotFound
 from pinflex.trajectory import Trajectory, solve_ik
@@ -112,7 +112,7 @@ def solve_pose_ik(
 def path_trajectory(
     arm,
     frame: str,
-    waypoints: Sequence[Sequence[float]],
+    waypoints: ArrayLike,
     *,
     n_samples: int = 50,
     duration_s: float = 1.0,
@@ -194,7 +194,8 @@ def joint_limits(arm) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def check_joint_limits(arm, traj: Trajectory, *, on_violation: str = "raise") -> np.ndarray:
+def check_joint_limits(arm, traj: Trajectory, *,
+                       on_violation: Literal["warn", "raise"] = "raise") -> np.ndarray:
     """Samples of ``traj`` (arm coordinates) outside the URDF joint limits, (ns, nv) mask."""
     lo, hi = joint_limits(arm)
     rel = Trajectory(traj.times_s, traj.q @ arm.coord_map.T, traj.joint_names, traj.name)

@@ -9,6 +9,7 @@ import numpy as np
 
 from pinflex import jets
 from pinflex.erls import FlexibleModel
+from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
 from pinflex.linalg import readonly as _readonly
 from pinflex.parametric.model import TaylorModel, expand
@@ -37,13 +38,13 @@ class TrajectoryExpansion:
     def evaluate(self, Q, *, quantity: str = "freq_hz") -> np.ndarray:
         """Values at the trajectory's own samples Q (ns, nv), each from its segment's model."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
-        out = None
+        out: np.ndarray | None = None
         for tm, (a, b) in zip(self.models, self.segments):
             v = tm.evaluate(Q[a:b], quantity=quantity, warn=False)
             if out is None:
                 out = np.empty((Q.shape[0],) + v.shape[1:])
             out[a:b] = v
-        return out
+        return np.empty((Q.shape[0], 0)) if out is None else out
 
 
 def _cover(model, Q, y, exact, tol, order, modes, joints, quantity, step):
@@ -106,13 +107,15 @@ def expand_along(model: FlexibleModel, Q, y=None, *, tol: float = 1e-3, modes=(1
     f = model.frequencies(Q, y, n_modes=max(modes))[:, [m - 1 for m in modes]]
     exact = f if quantity == "freq_hz" else (2 * np.pi * f) ** 2
     step = step or (Q.shape[0] // 38 + 1)
-    best = None
+    best: tuple[int, list, list] | None = None
     candidates = {}
     for p in orders:
         models, segments = _cover(model, Q, y, exact, tol, p, modes, joints, quantity, step)
         candidates[int(p)] = len(models)
         if best is None or len(models) < len(best[1]):
             best = (p, models, segments)
+    if best is None:
+        raise ConfigurationError("give at least one Taylor order in 'orders'")
     p, models, segments = best
     result = TrajectoryExpansion(tuple(models), tuple(segments), int(p), tol, 0.0, candidates)
     err = float(np.max(np.abs(result.evaluate(Q, quantity=quantity) / exact - 1)))

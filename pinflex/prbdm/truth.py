@@ -174,10 +174,10 @@ def relative_compliance_matrix(planform: Planform, nodes_m: np.ndarray) -> np.nd
     g = np.linalg.inv(np.swapaxes(chol, 1, 2))
     offset = nodes[1:, None] - nodes[None, 1:]
     reach = (np.arange(n_el)[:, None] >= np.arange(n_el)[None, :]).astype(float)
-    b = np.zeros((n_el, 2, n_el, 2))
-    b[:, 0, :, :] = reach[:, :, None] * (g[None, :, 0, :] + offset[:, :, None] * g[None, :, 1, :])
-    b[:, 1, :, :] = reach[:, :, None] * g[None, :, 1, :]
-    b = b.reshape(2 * n_el, 2 * n_el)
+    b4 = np.zeros((n_el, 2, n_el, 2))
+    b4[:, 0, :, :] = reach[:, :, None] * (g[None, :, 0, :] + offset[:, :, None] * g[None, :, 1, :])
+    b4[:, 1, :, :] = reach[:, :, None] * g[None, :, 1, :]
+    b = b4.reshape(2 * n_el, 2 * n_el)
     _, m_glob = assemble_beam(planform, nodes)
     c = b.T @ (m_glob @ b)
     return 0.5 * (c + c.T)
@@ -289,7 +289,7 @@ def beam_frequencies(planform: Planform, n_modes: int = 5, max_element_m: float 
         )
     return BeamModes(
         freq_hz=np.sqrt(rich[1]) / (2.0 * np.pi), eigval=rich[1], mesh_eigval=lam,
-        n_elements=n_el, observed_order=order, rel_error_estimate=gap,
+        n_elements=(n_el[0], n_el[1], n_el[2]), observed_order=order, rel_error_estimate=gap,
     )
 
 

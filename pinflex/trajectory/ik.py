@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pinflex.exceptions import (
     IKNotConverged,
@@ -114,7 +114,7 @@ def solve_ik(
 # --------------------------------------------------------------------------- planar 2R arm
 
 
-def absolute_to_relative(q_abs: np.ndarray) -> np.ndarray:
+def absolute_to_relative(q_abs: ArrayLike) -> np.ndarray:
     """Absolute link angles (paper 000) → relative joint angles (Pinocchio), planar chain.
 
     ``q_rel[..., 0] = q_abs[..., 0]`` and ``q_rel[..., j] = q_abs[..., j] − q_abs[..., j−1]``
@@ -148,7 +148,7 @@ def planar_2r_ik(
     l2_m: float,
     elbow_sign: int,
     *,
-    q_ref: Sequence[float] | None = None,
+    q_ref: ArrayLike | None = None,
 ) -> np.ndarray:
     """Closed-form inverse kinematics of a planar 2R arm (same geometry as :func:`planar_2r_fk`).
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Literal, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pinflex.exceptions import (
     InvalidPath,
@@ -61,7 +62,7 @@ class _Piece:
         return self.center + self.radius * np.column_stack([np.cos(angle), np.sin(angle)])
 
 
-def _parse_pieces(start: Sequence[float], segments: Sequence[tuple]) -> list[_Piece]:
+def _parse_pieces(start: ArrayLike, segments: Sequence[tuple]) -> list[_Piece]:
     """Turn the segment spec of :func:`workspace_path` into geometric pieces."""
     current = np.asarray(start, dtype=float)
     if current.shape != (2,):
@@ -101,7 +102,7 @@ def _parse_pieces(start: Sequence[float], segments: Sequence[tuple]) -> list[_Pi
                     f"segment {n}: radius {radius:g} m is smaller than half the chord {half:g} m"
                 )
             normal = np.array([-chord[1], chord[0]]) / (2.0 * half)  # left of the chord
-            offset = np.sqrt(max(radius**2 - half**2, 0.0))
+            offset = float(np.sqrt(max(float(radius**2 - half**2), 0.0)))
             # minor arc: its center lies left of the chord for ccw, right for cw
             sign = 1.0 if direction in (None, "ccw") else -1.0
             center = current + 0.5 * chord + sign * offset * normal
@@ -137,7 +138,7 @@ def _timing(tau: np.ndarray, profile: str) -> np.ndarray:
 
 
 def workspace_path(
-    start: Sequence[float],
+    start: ArrayLike,
     segments: Sequence[tuple],
     n_samples: int,
     *,

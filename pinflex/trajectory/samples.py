@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from pinflex.exceptions import (
     InvalidTrajectory,
@@ -114,8 +115,8 @@ class Trajectory:
 
     def check_limits(
         self,
-        lower: np.ndarray,
-        upper: np.ndarray,
+        lower: ArrayLike,
+        upper: ArrayLike,
         *,
         on_violation: Literal["warn", "raise"] = "warn",
     ) -> np.ndarray:
