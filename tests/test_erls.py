@@ -145,6 +145,26 @@ def test_node_motion_of_a_mode_matches_its_elastic_coordinates(two_link_planar):
     # elastic motion is orthogonal to nothing in particular, but the planar model moves in-plane
     assert np.abs(r.node_motion["link1"][..., 2]).max() < 1e-14
     assert np.abs(r.node_motion["link1"][..., 3:5]).max() < 1e-14
+    # link 1 hangs from the ground: node k moves by its own elastic dofs (beam axes turned by
+    # q1 into the world) plus the rigid rotation phi_q1 about z through the base
+    model = two_link_planar
+    names = list(model.x_names)
+    R = _rot_z(q[0]) @ model.plan.beams["link1"].spec.rotation
+    for m in range(2):
+        phi = r.shapes[:, m]
+        dq1 = phi[model.nx]
+        for k in range(1, model.plan.beams["link1"].spec.elements + 1):
+            u = np.array([phi[names.index(f"link1.n{k}.u{a}")] for a in "xy"] + [0.0])
+            p = r.node_positions["link1"][k]
+            expected = R @ u + dq1 * np.array([-p[1], p[0], 0.0])
+            np.testing.assert_allclose(r.node_motion["link1"][m, k, :3], expected, atol=1e-12)
+            rz = phi[names.index(f"link1.n{k}.rz")]
+            assert r.node_motion["link1"][m, k, 5] == pytest.approx(rz + dq1, abs=1e-12)
+
+
+def _rot_z(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def test_panda_overlay_loads_and_is_invariant_about_the_vertical():
