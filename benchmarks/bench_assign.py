@@ -9,6 +9,7 @@ by the QP's cost and by the largest error, beside the QP's design.
 
 from __future__ import annotations
 
+import argparse
 import time
 import warnings
 from pathlib import Path
@@ -30,6 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def main():
     """Run the benchmark."""
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     warnings.simplefilter("ignore")
     model = benchmark_model()
     traj = benchmark_trajectory(model)

@@ -11,6 +11,8 @@ pairs of the same size. The matrix jets are synthetic (random, with coefficients
 
 from __future__ import annotations
 
+import argparse
+
 import numpy as np
 import scipy.linalg
 from timing import best_of
@@ -41,6 +43,7 @@ def synthetic_pencil(space, rng):
 
 def main():
     """Print the timing table."""
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     rng = np.random.default_rng(0)
     pairs = []
     for _ in range(N_SAMPLES):
