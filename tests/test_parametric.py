@@ -223,3 +223,17 @@ def test_sampled_model_equals_the_full_polynomial_for_any_design():
                 tm.evaluate(traj.q, np.array(y), quantity="freq_hz", linear_in_design=lin),
                 rtol=1e-13,
             )
+
+
+def test_taylor_model_is_read_only_and_keeps_no_hidden_caches():
+    """Arrays of a Taylor model cannot be written; evaluating it adds no state to it."""
+    model = FlexibleModel(TWO_LINK, planar=True)
+    tm = expand(model, Q0, order=3)
+    for array in (tm.eigval_jets, tm.freq_jets, tm.q0, tm.y0, tm.radius,
+                  tm.coefficients("freq_hz", linear_in_design=True)):
+        with pytest.raises(ValueError):
+            array[...] = 0.0
+    before = dict(vars(tm))
+    first = tm.evaluate(Q0[None] + 0.01, quantity="freq_hz")
+    assert tm.evaluate(Q0[None] + 0.01, quantity="freq_hz") == pytest.approx(first, rel=0)
+    assert set(vars(tm)) == set(before)

@@ -175,7 +175,7 @@ class SampledTaylor:
 def sample(tm: TaylorModel, Q, *, quantity: str = "freq_hz",
            linear_in_design: bool = False) -> SampledTaylor:
     """Fix the joint samples of a Taylor model (see :class:`SampledTaylor`)."""
-    coef = tm._coefficients(quantity, bool(linear_in_design))  # (ncoef, k)
+    coef = tm.coefficients(quantity, linear_in_design=bool(linear_in_design))  # (ncoef, k)
     nj, nd = len(tm.joint_idx), len(tm.design_idx)
     mi = tm.space.multi_indices
     Q = np.atleast_2d(np.asarray(Q, dtype=float))

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 import scipy.linalg as sla
@@ -18,6 +19,7 @@ from pinflex.exceptions import (
     TaylorRadiusWarning,
 )
 from pinflex.jets import JetSpace
+from pinflex.linalg import readonly as _readonly
 from pinflex.parametric.conditioned import expansion_eigenpairs, solver_matrix_jets
 from pinflex.parametric.eigen import eigen_jets, radius_estimate, spectrum_slopes
 from pinflex.parametric.matrices import matrix_jets
@@ -46,6 +48,15 @@ class TaylorModel:
         freq_jets: Jets of the frequencies [Hz] (derived from ``eigval_jets`` by default).
         joints: The model's joint conditions ``{joint: 'free' | 'locked' | 'k=...'}``; the
             mode numbers count the non-rigid modes under these conditions.
+        coefficient_matrices: ``{(quantity, linear_in_design): (ncoef, k)}`` coefficients of
+            the four polynomials :meth:`evaluate` uses (derived).
+        degree_blocks: ``{quantity: (ncoef, k·(p+1) + k)}``: per mode one column per degree
+            holding that degree's coefficients only, then the full coefficients (derived).
+        spectral_weights: ``(nvars, k·w)`` rates ``2 (∇λ_j − ∇λ_i) / |λ_j − λ_i|`` of each
+            mode against its spectral neighbours, or None without a spectrum (derived).
+
+    A Taylor model never changes after construction: every array is a read-only copy, and
+    the derived fields are computed once, when it is built.
     """
 
     space: JetSpace
@@ -60,11 +71,39 @@ class TaylorModel:
     spectrum: np.ndarray | None = None
     spectrum_slopes: np.ndarray | None = None
     joints: dict[str, str] | None = None
+    coefficient_matrices: Mapping[tuple[str, bool], np.ndarray] = field(
+        init=False, repr=False, compare=False)
+    degree_blocks: Mapping[str, np.ndarray] = field(init=False, repr=False, compare=False)
+    spectral_weights: np.ndarray | None = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.freq_jets is None:
-            f = jets.sqrt(self.space, self.eigval_jets) / (2.0 * np.pi)
-            object.__setattr__(self, "freq_jets", f)
+            object.__setattr__(self, "freq_jets",
+                               jets.sqrt(self.space, self.eigval_jets) / (2.0 * np.pi))
+        for name in ("q0", "y0", "eigval_jets", "radius", "freq_jets", "spectrum",
+                     "spectrum_slopes"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _readonly(getattr(self, name)))
+        ncoef, p, off = self.space.ncoef, self.order, self.space.degree_offsets
+        coef, blocks = {}, {}
+        for quantity, jet in (("eigval", self.eigval_jets), ("freq_hz", self.jet("freq_hz"))):
+            full = np.ascontiguousarray(jet.reshape(ncoef, -1))
+            lin = jets.partially_linear(self.space, jet, self.design_vars)
+            coef[quantity, False] = _readonly(full)
+            coef[quantity, True] = _readonly(np.ascontiguousarray(lin.reshape(ncoef, -1)))
+            # per mode one column per degree holding that degree's coefficients only, then the
+            # full coefficients: one product with the monomials gives both
+            k = full.shape[1]
+            B = np.zeros((ncoef, k * (p + 1) + k))
+            for c in range(k):
+                for d in range(p + 1):
+                    B[off[d]:off[d + 1], c * (p + 1) + d] = full[off[d]:off[d + 1], c]
+            B[:, k * (p + 1):] = full
+            blocks[quantity] = _readonly(B)
+        object.__setattr__(self, "coefficient_matrices", MappingProxyType(coef))
+        object.__setattr__(self, "degree_blocks", MappingProxyType(blocks))
+        W = spectral_weights(self.modes, self.spectrum, self.spectrum_slopes)
+        object.__setattr__(self, "spectral_weights", None if W is None else _readonly(W))
 
     @property
     def order(self) -> int:
@@ -75,7 +114,7 @@ class TaylorModel:
         """Coefficients of λ (``eigval``, [rad²/s²]) or of the frequency (``freq_hz``, [Hz])."""
         if quantity == "eigval":
             return self.eigval_jets
-        if quantity == "freq_hz":
+        if quantity == "freq_hz" and self.freq_jets is not None:
             return self.freq_jets
         raise ConfigurationError(f"quantity='{quantity}': expected 'eigval' or 'freq_hz'")
 
@@ -88,10 +127,7 @@ class TaylorModel:
             raise ConfigurationError(
                 f"expected {self.q0.size} joint values per sample, got shape {Q.shape}"
             )
-        jidx = self.__dict__.get("_jidx_arr")
-        if jidx is None:
-            jidx = np.asarray(self.joint_idx, dtype=int)
-            self.__dict__["_jidx_arr"] = jidx
+        jidx = np.asarray(self.joint_idx, dtype=int)
         if len(jidx) < self.q0.size:
             fixed = [i for i in range(self.q0.size) if i not in self.joint_idx]
             if np.any(np.abs(Q[:, fixed] - self.q0[fixed]) > 1e-12):
@@ -160,10 +196,10 @@ class TaylorModel:
         dx = np.atleast_2d(np.asarray(dx, dtype=float))
         if mon is None:
             mon = jets.monomials(self.space, dx)
-        return self._estimate_from(dx, mon @ self._degree_blocks(quantity))[:2]
+        return self._estimate_from(dx, mon @ self.degree_blocks[quantity])[:2]
 
     def _estimate_from(self, dx: np.ndarray, con: np.ndarray):
-        """(estimate, ratio, value) from ``mon @ _degree_blocks(quantity)``."""
+        """(estimate, ratio, value) from ``mon @ degree_blocks[quantity]``."""
         p, k = self.order, len(self.modes)
         n = dx.shape[0]
         value = con[:, k * (p + 1):]
@@ -172,11 +208,11 @@ class TaylorModel:
         if p >= 1:
             j0 = max(1, (p + 1) // 2)
             r = a[:, :, j0:] / c0[:, :, None]
-            np.power(r, self._inverse_orders(j0), out=r)
+            np.power(r, (1.0 / np.arange(j0, p + 1, dtype=float))[None, None, :], out=r)
             rho = r.max(axis=2)
         else:
             rho = np.zeros((n, k))
-        W = self._spectral_weights()
+        W = self.spectral_weights
         if W is not None:  # twice the meeting rate: half the meeting distance
             np.maximum(rho, np.abs(dx @ W).reshape(n, k, -1).max(axis=2), out=rho)
         tail = np.maximum(a[:, :, p], rho * a[:, :, p - 1]) if p >= 1 else rho * c0
@@ -185,60 +221,9 @@ class TaylorModel:
         est[rho >= 1.0] = np.inf
         return est, rho, value
 
-    def _inverse_orders(self, j0: int) -> np.ndarray:
-        """Exponents 1/j (j = j0..p) shaped for the root test, cached."""
-        inv = self.__dict__.get("_inv_orders")
-        if inv is None:
-            inv = (1.0 / np.arange(j0, self.order + 1, dtype=float))[None, None, :]
-            self.__dict__["_inv_orders"] = inv
-        return inv
-
-    def _degree_blocks(self, quantity: str) -> np.ndarray:
-        """Coefficient blocks (ncoef, k·(p+1) + k) for contributions and value, cached.
-
-        Per mode, one column per degree holding that degree's coefficients only, then the full
-        coefficients: one product with the monomials gives both.
-        """
-        cache = self.__dict__.setdefault("_block_cache", {})
-        if quantity not in cache:
-            coef = self._coefficients(quantity, False)
-            p, k = self.order, coef.shape[1]
-            off = self.space.degree_offsets
-            B = np.zeros((coef.shape[0], k * (p + 1) + k))
-            for c in range(k):
-                for d in range(p + 1):
-                    B[off[d]:off[d + 1], c * (p + 1) + d] = coef[off[d]:off[d + 1], c]
-            B[:, k * (p + 1):] = coef
-            cache[quantity] = B
-        return cache[quantity]
-
-    def _spectral_weights(self) -> np.ndarray | None:
-        """(nvars, k·(m−1)): ``2 (∇λ_j − ∇λ_i) / |λ_j − λ_i|`` for each mode i and other j."""
-        if self.spectrum is None or self.spectrum_slopes is None or self.spectrum.size < 2:
-            return None
-        W = self.__dict__.get("_spectral_w")
-        if W is None:
-            w, S = self.spectrum, self.spectrum_slopes
-            blocks = []
-            for m in self.modes:
-                i = m - 1
-                # the nearest eigenvalues (four on each side) are the possible partners
-                near = [j for j in range(max(0, i - 4), min(w.size, i + 5)) if j != i]
-                gap = np.abs(w[near] - w[i])
-                blocks.append((S[:, near] - S[:, [i]]) / gap[None, :])
-            width = max(b.shape[1] for b in blocks)
-            blocks = [np.pad(b, ((0, 0), (0, width - b.shape[1]))) for b in blocks]
-            W = np.ascontiguousarray(2.0 * np.concatenate(blocks, axis=1))
-            self.__dict__["_spectral_w"] = W
-        return W
-
     def _spectral_radius(self, rays: np.ndarray) -> np.ndarray:
         """Distance along unit rays (n, nvars) at which the nearest eigenvalue would meet."""
-        W = self._spectral_weights()
-        if W is None:
-            return np.full((rays.shape[0], len(self.modes)), np.inf)
-        with np.errstate(divide="ignore"):
-            return 2.0 / np.abs(rays @ W).reshape(rays.shape[0], len(self.modes), -1).max(axis=2)
+        return meeting_distance(self.spectral_weights, rays, len(self.modes))
 
     def check_radius(self, dx: np.ndarray, tol: float = RADIUS_TOL, *,
                      quantity: str = "eigval", mon: np.ndarray | None = None,
@@ -293,27 +278,28 @@ class TaylorModel:
         dx = self.offsets(Q, Y, warn=False)
         mon = jets.monomials(self.space, dx)
         if not (warn or strict):
-            return mon @ self._coefficients(quantity, bool(linear_in_design))
+            return mon @ self.coefficients(quantity, linear_in_design=bool(linear_in_design))
         # one product gives the per-degree contributions for the check and, summed, the value
-        est, ratio, value = self._estimate_from(dx, mon @ self._degree_blocks(quantity))
+        est, ratio, value = self._estimate_from(dx, mon @ self.degree_blocks[quantity])
         self._report(est, ratio, tol, strict)
         if linear_in_design:
-            return mon @ self._coefficients(quantity, True)
+            return mon @ self.coefficients(quantity, linear_in_design=True)
         return value
 
-    def _coefficients(self, quantity: str, linear: bool) -> np.ndarray:
-        """Coefficient matrix (ncoef, k) of a polynomial, cached."""
-        cache = self.__dict__.setdefault("_coef_cache", {})
-        key = (quantity, linear)
-        if key not in cache:
-            jet = self.jet(quantity)
-            if linear:
-                jet = jets.partially_linear(self.space, jet, self._design_vars)
-            cache[key] = np.ascontiguousarray(jet.reshape(self.space.ncoef, -1))
-        return cache[key]
+    def coefficients(self, quantity: str = "eigval", *,
+                     linear_in_design: bool = False) -> np.ndarray:
+        """Coefficient matrix (ncoef, k) of a polynomial (read-only).
+
+        Args:
+            quantity: 'eigval' (λ [rad²/s²]) or 'freq_hz' (f [Hz]).
+            linear_in_design: The partially linear polynomial λ̂ of eq. (7) instead of λ^p.
+        """
+        self.jet(quantity)  # checks the name
+        return self.coefficient_matrices[quantity, bool(linear_in_design)]
 
     @property
-    def _design_vars(self) -> list[int]:
+    def design_vars(self) -> list[int]:
+        """Jet-variable indices of the expanded design variables."""
         n = len(self.joint_idx)
         return list(range(n, n + len(self.design_idx)))
 
@@ -331,7 +317,7 @@ class TaylorModel:
             l0 = np.repeat(jet[:1], np.atleast_2d(Q).shape[0], axis=0)
             grads = jet[1 : 1 + len(self.design_idx)]
             return l0, np.repeat(grads.T[None], l0.shape[0], axis=0)
-        qspace, l0, l1 = jets.design_split(self.space, self.jet(quantity), self._design_vars)
+        qspace, l0, l1 = jets.design_split(self.space, self.jet(quantity), self.design_vars)
         dq = self.offsets(Q, None)[:, : len(self.joint_idx)]
         mon = jets.monomials(qspace, dq)
         return mon @ l0, np.einsum("nc,jck->nkj", mon, l1)
@@ -366,7 +352,12 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
     lam, _ = eigen_jets(space, M, K, idx, eigvals0=w, eigvecs0=V)
     elastic = slice(model.n_rigid, None)
     slopes = spectrum_slopes(space, M, K, w[elastic], V[:, elastic])
-    tm = TaylorModel(
+    spectrum = w[elastic].copy()
+    # estimated radius (nvars, k) along each variable axis: min of coefficient and spectrum
+    W = spectral_weights(modes, spectrum, slopes)
+    r_c = radius_estimate(space, lam)  # (nvars, k)
+    radius = np.minimum(r_c, 0.5 * meeting_distance(W, np.eye(space.nvars), len(modes)))
+    return TaylorModel(
         space=space,
         q0=np.asarray(q0, dtype=float),
         y0=model.check_y(y0),
@@ -374,17 +365,42 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         joint_idx=tuple(jidx),
         design_idx=tuple(didx),
         eigval_jets=lam,
-        radius=np.full((space.nvars, len(modes)), np.inf),
-        spectrum=w[elastic].copy(),
+        radius=radius,
+        spectrum=spectrum,
         spectrum_slopes=slopes,
         joints=model.joint_labels(),
     )
-    object.__setattr__(tm, "radius", _axis_radius(tm))
-    return tm
 
 
-def _axis_radius(tm: TaylorModel) -> np.ndarray:
-    """Estimated radius (nvars, k) along each variable axis: min of coefficient and spectrum."""
-    axes = np.eye(tm.space.nvars)
-    r_c = radius_estimate(tm.space, tm.eigval_jets)  # (nvars, k)
-    return np.minimum(r_c, 0.5 * tm._spectral_radius(axes))  # half the meeting distance
+def spectral_weights(modes: Sequence[int], spectrum: np.ndarray | None,
+                     slopes: np.ndarray | None) -> np.ndarray | None:
+    """(nvars, k·w): ``2 (∇λ_j − ∇λ_i) / |λ_j − λ_i|`` for each mode i and neighbour j.
+
+    Args:
+        modes: Mode numbers (1 = lowest non-rigid).
+        spectrum: Non-rigid eigenvalues at the expansion point [rad²/s²], (m,), or None.
+        slopes: Their first derivatives along each variable, (nvars, m), or None.
+
+    Returns:
+        The rates, or None without a spectrum of at least two eigenvalues.
+    """
+    if spectrum is None or slopes is None or spectrum.size < 2:
+        return None
+    blocks = []
+    for m in modes:
+        i = m - 1
+        # the nearest eigenvalues (four on each side) are the possible partners
+        near = [j for j in range(max(0, i - 4), min(spectrum.size, i + 5)) if j != i]
+        gap = np.abs(spectrum[near] - spectrum[i])
+        blocks.append((slopes[:, near] - slopes[:, [i]]) / gap[None, :])
+    width = max(b.shape[1] for b in blocks)
+    blocks = [np.pad(b, ((0, 0), (0, width - b.shape[1]))) for b in blocks]
+    return np.ascontiguousarray(2.0 * np.concatenate(blocks, axis=1))
+
+
+def meeting_distance(W: np.ndarray | None, rays: np.ndarray, k: int) -> np.ndarray:
+    """Distance (n, k) along unit rays (n, nvars) at which the nearest eigenvalue would meet."""
+    if W is None:
+        return np.full((rays.shape[0], k), np.inf)
+    with np.errstate(divide="ignore"):
+        return 2.0 / np.abs(rays @ W).reshape(rays.shape[0], k, -1).max(axis=2)
