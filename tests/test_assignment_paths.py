@@ -102,5 +102,5 @@ def test_brute_force_cost_is_the_exact_trapezoid_sum(arm):
 
     assert bf.best_cost == pytest.approx(cost(bf.y_best_cost), rel=1e-10)
     for y in ([0.0, 0.0], [0.25, 0.25], [0.125, 0.0], [0.25, 0.0]):  # points of its first grid
-        assert bf.best_cost <= cost(np.array(y)) + 1e-12
+        assert bf.best_cost <= cost(np.array(y)) * (1 + 1e-9)  # two eigensolvers: round-off
     assert bf.evaluations == 2 * 25

@@ -37,7 +37,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from pinflex import beam
 from pinflex.erls.terms import offset_block
@@ -138,8 +137,7 @@ def solve_plan(model) -> SolvePlan:
         rb = rotate_twist(spec.rotation.T)
         R = np.concatenate([_transport(k * le) @ rb for k in range(n + 1)])
         A = np.concatenate([C, R, p.jac], axis=1)[rows]
-        Mk = sp.csr_matrix(p.mass[np.ix_(rows, rows)])  # block tridiagonal
-        X = np.asarray(Mk @ A)
+        X = p.mass[np.ix_(rows, rows)] @ A  # block tridiagonal: small, dense is fine
         H = np.empty((A.shape[1], A.shape[1]))
         H[r * n :] = A[:, r * n :].T @ X
         H[: r * n] = _cumulative_transpose(X, P0[nd], Ofs[nd], le, n, r)
