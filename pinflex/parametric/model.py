@@ -328,7 +328,25 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
            ) -> TaylorModel:
     """Build the Taylor model of the given non-rigid modes at ``(q0, y0)``.
 
+    The eigenvalues ``λ_i(q, y) = ω_i²`` of ``K φ = λ M φ`` are expanded to order ``p`` in the
+    listed joints and design variables, exactly (jets of M and K through the joint kinematics,
+    then the eigenpair recursion of paper 000 eq. 5–6).
+
+    Args:
+        model: The flexible model.
+        q0: Expansion pose, one value per moving joint (nv,), user coordinates [rad or m].
+        y0: Expansion design values (ny,) [kg] or ``{name: value}`` (default: nominal).
+        order: Truncation order p (>= 0).
+        modes: Non-rigid mode numbers to expand, 1 = lowest (default: mode 1).
+        joints: Names of the joints to expand (default: all moving joints).
+        design: Names of the design variables to expand (default: all).
+
+    Returns:
+        A read-only :class:`TaylorModel`: jets of λ [rad²/s²] and of f [Hz], shape (ncoef, k)
+        with ``k = len(modes)``, and the estimated convergence radius (nvars, k).
+
     Raises:
+        ConfigurationError: Modes outside 1..n_elastic, unknown names, a bad order or pose.
         RepeatedEigenvalue: a requested mode is (nearly) repeated at the expansion point.
     """
     modes = tuple(int(m) for m in np.atleast_1d(modes))
