@@ -234,3 +234,14 @@ def test_every_file_writer_goes_through_the_atomic_helper():
             if any(p.search(line) for p in patterns):
                 offenders.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
     assert offenders == []
+
+
+def test_expand_and_model_flags_are_strict(two_link_planar):
+    """Mode lists of floats or strings, and planar='no', are refused instead of coerced."""
+    import pinflex
+
+    for modes in ((1.5,), "1", []):
+        with pytest.raises(ConfigurationError, match="whole mode numbers"):
+            pinflex.expand(two_link_planar, Q0, order=2, modes=modes)
+    with pytest.raises(ConfigurationError, match="planar must be True or False"):
+        FlexibleModel(TWO_LINK, planar="no")

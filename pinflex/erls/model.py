@@ -149,6 +149,8 @@ class FlexibleModel:
         if params:
             description = description.with_values(params)
         self.description = description
+        if not isinstance(planar, bool | np.bool_):
+            raise ConfigurationError(f"planar must be True or False, got {planar!r}")
         self.planar = bool(planar)
         try:
             self.model = pin.buildModelFromXML(description.urdf_xml)

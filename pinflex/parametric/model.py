@@ -349,7 +349,12 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         ConfigurationError: Modes outside 1..n_elastic, unknown names, a bad order or pose.
         RepeatedEigenvalue: a requested mode is (nearly) repeated at the expansion point.
     """
-    modes = tuple(int(m) for m in np.atleast_1d(modes))
+    raw = [modes] if isinstance(modes, int | np.integer | str) else list(np.ravel(modes))
+    if not raw or any(isinstance(m, bool | str) or not isinstance(m, int | np.integer)
+                      for m in raw):
+        raise ConfigurationError(f"modes must be whole mode numbers 1..{model.n_elastic}, "
+                                 f"got {modes!r}")
+    modes = tuple(int(m) for m in raw)
     if min(modes) < 1 or max(modes) > model.n_elastic:
         raise ConfigurationError(f"modes {modes} must lie in 1..{model.n_elastic}")
     jets_of = solver_matrix_jets if solve.supported(model) else matrix_jets
