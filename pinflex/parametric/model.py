@@ -350,8 +350,9 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         RepeatedEigenvalue: a requested mode is (nearly) repeated at the expansion point.
     """
     raw = [modes] if isinstance(modes, int | np.integer | str) else list(np.ravel(modes))
-    if not raw or any(isinstance(m, bool | str) or not isinstance(m, int | np.integer)
-                      for m in raw):
+    if not raw or any(isinstance(m, bool | str | np.bool_)
+                      or not isinstance(m, int | np.integer | float | np.floating)
+                      or not float(m).is_integer() for m in raw):
         raise ConfigurationError(f"modes must be whole mode numbers 1..{model.n_elastic}, "
                                  f"got {modes!r}")
     modes = tuple(int(m) for m in raw)
