@@ -109,10 +109,15 @@ class FlexibleLink:
 
     @property
     def rotation(self) -> np.ndarray:
-        """Beam axes in the link frame, columns (x, y, z), (3, 3)."""
-        x = self.tip / self.length_m
-        z = self.normal
-        return np.column_stack([x, np.cross(z, x), z])
+        """Beam axes in the link frame, columns (x, y, z), (3, 3) (computed once, read-only)."""
+        cached = self.__dict__.get("_rotation")
+        if cached is None:
+            x = self.tip / self.length_m
+            z = self.normal
+            cached = np.column_stack([x, np.cross(z, x), z])
+            cached.setflags(write=False)
+            object.__setattr__(self, "_rotation", cached)
+        return cached
 
 
 @dataclass(frozen=True)

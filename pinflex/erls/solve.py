@@ -602,7 +602,7 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
     shapes_w = np.zeros((nd, r))
     shapes_w[:nx] = phi_w
     if Lq is not None:
-        shapes_w[nx:] = -scipy.linalg.solve_triangular(Lq, Y @ phi_w, lower=True, trans="T")
+        shapes_w[nx:] = -np.linalg.solve(np.swapaxes(Lq, -1, -2), Y @ phi_w)  # nv is small
     lam = 1.0 / mu
     shapes_x = np.zeros((nd, k - r))
     if r < k:

@@ -141,8 +141,6 @@ def expansion_eigenpairs(model: FlexibleModel, M0: np.ndarray):
     Returns:
         ``(w, V)``: eigenvalues ascending (ndof,) and shapes (ndof, ndof).
     """
-    import scipy.linalg
-
     nx, nv = model.nx, model.nv
     lam, shapes_w, shapes_x = solve.eigvecs(model, M0)
     if shapes_x.shape[1]:
@@ -153,6 +151,6 @@ def expansion_eigenpairs(model: FlexibleModel, M0: np.ndarray):
     V = np.zeros((nx + nv, nx + nv))
     if nv:
         Lq = np.linalg.cholesky(M0[nx:, nx:])
-        V[nx:, :nv] = scipy.linalg.solve_triangular(Lq, np.eye(nv), lower=True, trans="T")
+        V[nx:, :nv] = np.linalg.inv(Lq.T)  # nv × nv, small
     V[:, nv:] = shapes_w
     return np.concatenate([np.zeros(nv), lam]), V
