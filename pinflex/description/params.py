@@ -92,9 +92,10 @@ def parse_parameters(root_el: ET.Element, ns: str, overrides: dict[str, float] |
         for key in ("value", "lower", "upper"):
             if reference(el.get(key)) is not None:
                 raise InvalidDescription(f"{what}: {key} must be a number, not a reference")
-        if el.get("value") is None:
+        value_text = el.get("value")
+        if value_text is None:
             raise InvalidDescription(f"{what}: attribute 'value' is missing")
-        value = _number(el.get("value"), what + " value")
+        value = _number(value_text, what + " value")
         lower = _number(el.get("lower", "-inf"), what + " lower")
         upper = _number(el.get("upper", "inf"), what + " upper")
         design_text = el.get("design", "false").lower()

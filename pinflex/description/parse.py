@@ -113,12 +113,12 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
         raise InvalidDescription(f"the URDF's root element is <{root_el.tag}>, expected <robot>")
     params = parse_parameters(root_el, _NS, values)
     R = Resolver(params)
-    links = tuple(el.get("name") for el in root_el.findall("link"))
+    links = tuple(_name(el, "<link>") for el in root_el.findall("link"))
     inertias = {}
     for el in root_el.findall("link"):
         inertial = el.find("inertial")
         if inertial is not None:
-            inertias[el.get("name")] = _parse_inertial(el.get("name"), inertial)
+            inertias[_name(el, "<link>")] = _parse_inertial(_name(el, "<link>"), inertial)
     joints: dict[str, Joint] = {}
     for el in root_el.findall("joint"):
         j = _parse_joint(el, links)
@@ -227,15 +227,23 @@ def _parse_inertial(link: str, el: ET.Element) -> RigidInertia:
     return RigidInertia(mass=mass, com=xyz, inertia=rot @ inertia @ rot.T)
 
 
+def _name(el: ET.Element | None, what: str, key: str = "name") -> str:
+    """A required string attribute of a URDF element."""
+    value = None if el is None else el.get(key)
+    if not value:
+        raise InvalidDescription(f"{what} needs a '{key}' attribute")
+    return value
+
+
 def _parse_joint(el: ET.Element, links: tuple[str, ...]) -> Joint:
-    name = el.get("name")
+    name = _name(el, "<joint>")
     jtype = el.get("type")
     if jtype not in SUPPORTED_JOINTS:
         raise UnsupportedJoint(
             f"joint '{name}' has type '{jtype}'; pinflex handles {', '.join(SUPPORTED_JOINTS)}"
         )
-    parent = el.find("parent").get("link")
-    child = el.find("child").get("link")
+    parent = _name(el.find("parent"), f"joint '{name}' <parent>", "link")
+    child = _name(el.find("child"), f"joint '{name}' <child>", "link")
     for link in (parent, child):
         if link not in links:
             raise LinkNotFound(link, links)
@@ -251,7 +259,7 @@ def _parse_joint(el: ET.Element, links: tuple[str, ...]) -> Joint:
     if limit is not None and jtype in ("revolute", "prismatic"):
         lower = float(limit.get("lower", "-inf"))
         upper = float(limit.get("upper", "inf"))
-    return Joint(name, jtype, parent, child, xyz, rot, axis, lower, upper)
+    return Joint(name, str(jtype), parent, child, xyz, rot, axis, lower, upper)
 
 
 def _float_attr(el: ET.Element, key: str, what: str, *, required: bool = True,
@@ -294,7 +302,7 @@ def _parse_section(el: ET.Element | None, what: str, R: Resolver):
             out["wall"] = _entry(el, "wall", what, R)
         elif el.get("inner_diameter") is not None:
             value = R.number(el, "inner_diameter", what, positive=False, design_ok=True)
-            if value < 0.0:
+            if value is not None and value < 0.0:
                 raise InvalidBeamProperty(f"{what}: inner_diameter = {value} must be >= 0 [m]")
             ref = R.ref(el, "inner_diameter")
             out["inner_diameter"] = ref if ref is not None else value
@@ -418,7 +426,7 @@ def _parse_point_mass(el: ET.Element, links: tuple[str, ...], R: Resolver) -> Po
     name = el.get("name")
     if not name:
         raise InvalidDescription("<pinflex:point_mass> needs a 'name'")
-    link = el.get("link")
+    link = el.get("link") or ""
     if link not in links:
         raise LinkNotFound(link, links)
     what = f"point mass '{name}'"

@@ -214,7 +214,7 @@ def _check_spring_scale(model) -> None:
 
 def parent_rows(model, terms, alg, twist, joints_) -> np.ndarray:
     """``∂(aᵀθ_parent)/∂x`` of the given joints, (b, len(joints_), nx) in the algebra."""
-    rows: list[np.ndarray] = []
+    rows: list[np.ndarray | None] = []
     for j in joints_:
         tau = model._twist_at(alg, j.attach, twist[j.parent])
         if tau is None:

@@ -182,7 +182,7 @@ class FlexibleModel:
         )
         index = {d.name: i for i, d in enumerate(self.design)}
         self._mass_design_index = {
-            p.name: index[p.name if p.design else p.mass_ref]
+            p.name: index[p.name if p.design else str(p.mass_ref)]
             for p in description.point_masses
             if p.design or p.mass_ref is not None
         }

@@ -15,6 +15,7 @@ import csv
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -194,7 +195,7 @@ def modes_along(
     *,
     modes=3,
     extra: int = 3,
-    check_limits: str | None = "warn",
+    check_limits: Literal["warn", "raise"] | None = "warn",
 ) -> ModesAlong:
     """Tracked eigenfrequencies of ``arm`` along ``trajectory``.
 

@@ -139,7 +139,7 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     if nj:
         qspace = JetSpace(nj, int(order))
         terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
-        qalg = JetAlgebra(qspace)
+        qalg: JetAlgebra | BatchAlgebra = JetAlgebra(qspace)
         Mq, Mdq, Kq = model.assemble(terms, qalg)
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:

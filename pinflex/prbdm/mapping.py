@@ -321,7 +321,7 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
         MappingFailed: If every start fails to produce finite losses.
     """
     points = start_points(problem, n_starts, seed) if starts is None else np.atleast_2d(starts)
-    found = []
+    found: list[tuple[np.ndarray, Evaluation]] = []
     bar = ProgressBar(len(points), f"{problem.n_joints}R {kind}", progress)
     for x0 in points:
         try:
