@@ -61,33 +61,37 @@ def test_viewer_answers_after_many_interrupted_page_loads():
     assert not server.alive()
 
 
-def _serve(tmp_path):
+_SERVE = (
+    "import sys, time\n"
+    "from pinflex.visualization import served_visualizer\n"
+    "vis = served_visualizer()\n"
+    "print('serving the preview at', vis.url(), flush=True)\n"
+    "time.sleep(600)\n"
+)
+
+
+def _serve(tmp_path, cli: bool):
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    cli = subprocess.Popen(
-        [sys.executable, "-m", "pinflex", "view", str(TWO_LINK), "--planar"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, cwd=tmp_path, text=True,
-    )
-    for line in cli.stdout:
+    argv = ([sys.executable, "-m", "pinflex", "view", str(TWO_LINK), "--planar"] if cli
+            else [sys.executable, "-c", _SERVE])
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+                            cwd=tmp_path, text=True)
+    for line in proc.stdout:
         if "serving the preview at" in line:
             break
     else:
-        cli.wait()
-        pytest.fail("pinflex view did not start serving")
-    children = psutil.Process(cli.pid).children(recursive=True)
+        proc.wait()
+        pytest.fail("the viewer did not start serving")
+    children = psutil.Process(proc.pid).children(recursive=True)
     assert children, "no meshcat server process"
-    return cli, [c.pid for c in children]
+    return proc, [c.pid for c in children]
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
-def test_viewer_server_dies_with_the_command(tmp_path, sig):
-    """Killing `pinflex view` stops the meshcat server it started: no orphan keeps the port.
-
-    SIGTERM goes through the cleanup handler, SIGKILL through the parent-death signal.
-    """
-    cli, servers = _serve(tmp_path)
+def _check_no_orphan(tmp_path, sig, cli):
+    proc, servers = _serve(tmp_path, cli)
     try:
-        cli.send_signal(sig)
-        cli.wait(timeout=20)
+        proc.send_signal(sig)
+        proc.wait(timeout=20)
         assert all(_gone(pid) for pid in servers)
     finally:
         for pid in servers:  # never leave a server behind, even when the test fails
@@ -95,6 +99,21 @@ def test_viewer_server_dies_with_the_command(tmp_path, sig):
                 os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:
                 pass
-        if cli.poll() is None:
-            cli.kill()
-        cli.stdout.close()
+        if proc.poll() is None:
+            proc.kill()
+        proc.stdout.close()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
+def test_viewer_server_dies_with_its_process(tmp_path, sig):
+    """Killing the process that serves a viewer stops the meshcat server: no orphan.
+
+    SIGTERM goes through the cleanup handler, SIGKILL through the parent-death signal.
+    """
+    _check_no_orphan(tmp_path, sig, cli=False)
+
+
+@pytest.mark.slow
+def test_pinflex_view_leaves_no_orphan_on_sigterm(tmp_path):
+    """The same through the `pinflex view` command (slow: it builds a model first)."""
+    _check_no_orphan(tmp_path, signal.SIGTERM, cli=True)
