@@ -205,7 +205,7 @@ class PrescribedSystem:
         return Abar, bbar
 
 
-def external_forces(forces, q, t) -> np.ndarray:
+def external_forces(forces, q, t) -> np.ndarray | float:
     """Generalized force of world forces ``fn(t)`` [N] at points of links (``frame_map``)."""
     out = None
     for at, fn in forces:

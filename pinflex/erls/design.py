@@ -133,9 +133,9 @@ def components(model, terms, alg, which=None) -> list[np.ndarray | None]:
     if not model._design_channels:
         return []
     twist = model.root_twists(terms, alg)
-    out: list[np.ndarray] = []
-    full = []
-    cache = {}
+    out: list[np.ndarray | None] = []
+    full: list[np.ndarray | None] = []
+    cache: dict = {}
     for n, ch in enumerate(model._design_channels):
         if which is not None and not which[n]:
             full.append(None)

@@ -24,7 +24,7 @@ def _separable_pairs(order: int, nj: int, nd: int):
     space = JetSpace(nj + nd, order)
     qspace = JetSpace(nj, order) if nj else None
     dspace = JetSpace(nd, order)
-    q_alphas = [tuple(a) for a in qspace.multi_indices.tolist()] if nj else [()]
+    q_alphas = [tuple(a) for a in qspace.multi_indices.tolist()] if qspace is not None else [()]
     d_betas = [tuple(b) for b in dspace.multi_indices.tolist()]
     ia, ib, tg = [], [], []
     for i, a in enumerate(q_alphas):
