@@ -358,6 +358,9 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
     modes = tuple(int(m) for m in raw)
     if min(modes) < 1 or max(modes) > model.n_elastic:
         raise ConfigurationError(f"modes {modes} must lie in 1..{model.n_elastic}")
+    from pinflex.resources import check_order
+
+    order = check_order(order)  # both jet routes: refused before any work
     jets_of = solver_matrix_jets if solve.supported(model) else matrix_jets
     space, M, K, jidx, didx = jets_of(model, q0, y0, order=order, joints=joints, design=design)
     idx = [model.n_rigid + m - 1 for m in modes]
