@@ -116,7 +116,7 @@ def _section_limit_functions(model, full):
     from pinflex.sections import section_limits
 
     names = list(model.design_names)
-    links = [model.plan.beams[link].spec.inputs for link in model._design_links]
+    links = [model.plan.beams[link].spec.inputs for link in model.design_links]
     if not any(inp.shape == "hollow_circle" for inp in links):
         return None
 

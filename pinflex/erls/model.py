@@ -128,6 +128,9 @@ class FlexibleModel:
     _lock_rows: np.ndarray
     _joints_plain: bool
     _modal_Winv: np.ndarray | None
+    # set by the design-channel layout (pinflex.erls.design.setup)
+    _design_channels: tuple
+    _design_links: tuple[str, ...]
 
     def __init__(
         self,
@@ -292,6 +295,16 @@ class FlexibleModel:
     def point_mass_values(self) -> Mapping[str, float]:
         """Current values of every point mass ``{name: kg}`` (read-only view)."""
         return MappingProxyType(self._pm_values)
+
+    @property
+    def design_channels(self) -> tuple:
+        """Design-dependent mass and stiffness channels (:mod:`pinflex.erls.design`), read-only."""
+        return self._design_channels
+
+    @property
+    def design_links(self) -> tuple[str, ...]:
+        """Flexible links whose section or material depends on design parameters."""
+        return self._design_links
 
     @property
     def plane_normal(self) -> np.ndarray | None:
