@@ -45,3 +45,22 @@ def test_unreachable_tolerance_is_refused():
     with pytest.raises(ConfigurationError, match="no refinement"):
         elements_for_tolerance(load(TWO_LINK), [1.817, 5.312], 1e-14, planar=True,
                                max_factor=4)
+
+
+def test_cli_tol_reports_setting_and_estimate(capsys):
+    """`pinflex modes --tol` picks the elements, reports them and the estimate."""
+    import json
+
+    from conftest import TWO_LINK as path
+
+    from pinflex.cli import main
+
+    assert main(["modes", str(path), "--planar", "--q", "1.817", "5.312", "--modes", "3",
+                 "--tol", "1e-5", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    fid = out["fidelity"]
+    assert fid["elements"]["link1"] >= 4 and max(fid["estimated_error"]) <= 1e-5
+    desc = load(path)
+    factor = fid["elements"]["link1"] // 4
+    f = FlexibleModel(refined(desc, factor), planar=True).frequencies([1.817, 5.312], n_modes=3)
+    np.testing.assert_allclose(out["frequencies_hz"], f, rtol=1e-12)

@@ -16,6 +16,9 @@ def add_parser(sub) -> None:
     add_robot_arguments(p)
     p.add_argument("--modes", type=int, default=None, help="number of modes to report")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--tol", type=float, default=None, metavar="TOL",
+                   help="pick the fewest elements per link whose estimated relative error "
+                   "(Richardson, observed order) on the reported modes is at most TOL")
     p.add_argument("--trajectory", metavar="CSV",
                    help="joint trajectory (header: t, joint names): frequencies along the "
                    "motion, modes followed by their shapes (default 3 modes)")
@@ -33,12 +36,26 @@ def cmd_modes(args: argparse.Namespace) -> int:
     model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
                           joints=args.joints)
     if args.trajectory is not None:
+        if args.tol is not None:
+            from pinflex.exceptions import ConfigurationError
+
+            raise ConfigurationError("--tol picks the elements at one pose (--q); it does not "
+                                     "go with --trajectory")
         return _along(model, args)
     if args.csv or args.png is not None:
         from pinflex.exceptions import ConfigurationError
 
         raise ConfigurationError("--csv and --png go with --trajectory")
     q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
+    fidelity = None
+    if args.tol is not None:
+        from pinflex.erls.fidelity import elements_for_tolerance, refined
+
+        fidelity = elements_for_tolerance(
+            model.description, q, args.tol, n_modes=args.modes or 3, planar=args.planar,
+            values=parse_values(args.set), joints=args.joints)
+        model = FlexibleModel(refined(model.description, fidelity.factor), planar=args.planar,
+                              values=parse_values(args.set), joints=args.joints)
     # frequencies only: the batched numpy path, which needs no SciPy (fast start-up)
     freqs = model.frequencies(q, n_modes=args.modes)
     y = model.y0
@@ -57,6 +74,11 @@ def cmd_modes(args: argparse.Namespace) -> int:
             "joints": model.joint_labels(),
             "frequencies_hz": freqs.tolist(),
         }
+        if fidelity is not None:
+            out["fidelity"] = {"tol": args.tol, "elements": fidelity.elements,
+                               "estimated_error": fidelity.estimate.tolist(),
+                               "observed_order": fidelity.order.tolist(),
+                               "estimate": "Richardson from three uniform refinements"}
         print(json.dumps(out))
         return 0
     print(f"{model.description.name}: {model.ndof} dof ({model.nx} elastic + "
@@ -68,6 +90,12 @@ def cmd_modes(args: argparse.Namespace) -> int:
         values = ", ".join(f"{d.name}={v:.6g} kg" for d, v in zip(model.design, y))
         print(f"design: {values}")
     print(f"rigid modes: {model.n_rigid}")
+    if fidelity is not None:
+        els = ", ".join(f"{k}={v}" for k, v in fidelity.elements.items())
+        print(f"elements for tol {args.tol:g}: {els}; estimated error of the lowest "
+              f"{fidelity.estimate.size} modes <= {float(fidelity.estimate.max()):.2e} "
+              "(Richardson, observed order "
+              f"{', '.join(f'{p:.2f}' for p in fidelity.order)})")
     print(f"{'mode':>4}  {'frequency [Hz]':>16}")
     for i, f in enumerate(freqs, start=1):
         print(f"{i:>4}  {f:>16.6f}")

@@ -54,7 +54,8 @@ def refined(description: RobotDescription, factor: int) -> RobotDescription:
 
 
 def elements_for_tolerance(description, q, tol: float, *, n_modes: int = 3, y=None,
-                           planar: bool = False, max_factor: int = 64) -> FidelityChoice:
+                           planar: bool = False, max_factor: int = 64,
+                           **model_kwargs) -> FidelityChoice:
     """Cheapest uniform refinement whose estimated frequency error is at most ``tol``.
 
     Args:
@@ -65,6 +66,8 @@ def elements_for_tolerance(description, q, tol: float, *, n_modes: int = 3, y=No
         y: Design values (default nominal).
         planar: Planar model.
         max_factor: Largest refinement factor tried (a power of two).
+        **model_kwargs: Passed to :class:`~pinflex.erls.FlexibleModel` (``values``,
+            ``joints``, ...).
 
     Raises:
         ConfigurationError: ``tol`` is not positive, or no level up to ``max_factor`` meets it.
@@ -78,7 +81,7 @@ def elements_for_tolerance(description, q, tol: float, *, n_modes: int = 3, y=No
     factors, freqs, levels = [], [], []
     factor = 1
     while factor <= max_factor:
-        model = FlexibleModel(refined(description, factor), planar=planar)
+        model = FlexibleModel(refined(description, factor), planar=planar, **model_kwargs)
         freqs.append(model.frequencies(q, y, n_modes=n_modes))
         factors.append(factor)
         if len(freqs) >= 3:
