@@ -453,14 +453,19 @@ def section_equal(seed: int, starts: int, quick: bool) -> None:
         data = chain.model.createData()
         err_chain = np.max(np.abs(chain_frequencies(chain, None, data)[:n]
                                   / truth.modes.freq_hz[:n] - 1))
+        # The cheapest mesh of the family (element length L/count, EI ratio per element r)
+        # whose frequency error over the chain's modes reaches the chain's.
         n_el, nodes = None, None
-        for count in range(2, 400):
-            nodes = beam_mesh(beam, beam.length_m / count)
-            lam = fe_eigenvalues(beam, nodes, n)
-            err = np.max(np.abs(np.sqrt(lam) / (2 * np.pi) / truth.modes.freq_hz[:n] - 1))
-            if err <= err_chain:
-                n_el = nodes.size - 1
-                break
+        for ratio in (1.5, 2.0, 4.0, 16.0, 1e3):
+            for count in range(1, 200):
+                trial = beam_mesh(beam, beam.length_m / count, max_stiffness_ratio=ratio)
+                if n_el is not None and trial.size - 1 >= n_el:
+                    break
+                lam = fe_eigenvalues(beam, trial, n)
+                err = np.max(np.abs(np.sqrt(lam) / (2 * np.pi) / truth.modes.freq_hz[:n] - 1))
+                if err <= err_chain:
+                    n_el, nodes = trial.size - 1, trial
+                    break
         t_chain, t_fe = [], []
         for _ in range(5):
             t_chain.append(best_time(lambda: chain_frequencies(chain, None, data), number=200))
@@ -477,6 +482,55 @@ def section_equal(seed: int, starts: int, quick: bool) -> None:
     RESULTS["equal"] = out
 
 
+def section_study(store_path: str, outdir: str) -> None:
+    """Loss statistics per nR of a ``pinflex batch prbdm`` store, box plots, per-beam cost."""
+    import sqlite3
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    con = sqlite3.connect(f"file:{store_path}?mode=ro", uri=True)
+    rows = con.execute("SELECT item, status, result, metrics, timings FROM results").fetchall()
+    by_n: dict = {}
+    cpu: dict = {}
+    for item, status, result, metrics, timings in rows:
+        t = json.loads(timings)
+        cpu.setdefault(item, t.get("truth_cpu_s", 0.0))
+        cpu[item] += t.get("fit_cpu_s", 0.0)
+        if status != "ok":
+            continue
+        n = json.loads(result)["n_joints"]
+        by_n.setdefault(n, []).append(json.loads(metrics))
+    beams = len(cpu)
+    per_beam = float(np.mean(list(cpu.values()))) if cpu else float("nan")
+    print(f"== study {store_path}: {beams} beams, {len(rows)} rows; CPU per beam (truth + all "
+          f"fits) {per_beam:.1f} s -> 1,000 beams {per_beam * 1000 / 3600:.1f} core-h, "
+          f"50,000 beams {per_beam * 50000 / 3600:.0f} core-h")
+    keys = ("eigen_error", "deflection_error", "combined_error", "eq15a_sum")
+    out = {"beams": beams, "cpu_per_beam_s": per_beam, "per_n": {}}
+    fig, axes = plt.subplots(1, 3, figsize=(10, 3.6), sharey=True)
+    for n in sorted(by_n):
+        vals = {k: 100 * np.array([m[k] for m in by_n[n]]) for k in keys}
+        stats = {k: {q: float(np.percentile(v, q)) for q in (5, 50, 95)} for k, v in vals.items()}
+        out["per_n"][n] = {"count": len(by_n[n]), **stats}
+        print(f"   {n}R ({len(by_n[n])} fits), % p5/p50/p95: " + "; ".join(
+            f"{k} {stats[k][5]:.4f}/{stats[k][50]:.4f}/{stats[k][95]:.4f}" for k in keys))
+    for ax, key in zip(axes, keys[:3]):
+        ns = sorted(by_n)
+        ax.boxplot([100 * np.array([m[key] for m in by_n[n]]) for n in ns],
+                   tick_labels=[f"{n}R" for n in ns])
+        ax.set_yscale("log")
+        ax.set_title(key.replace("_", " ") + " [%]", fontsize=9)
+    fig.suptitle(f"PRBDM study: {beams} random beams (p = 10), combined fits", fontsize=10)
+    fig.tight_layout()
+    path = os.path.join(outdir, "prbdm_study.png")
+    fig.savefig(path, dpi=130)
+    print(f"   chart written to {path}")
+    RESULTS["study"] = out
+
+
 def main() -> None:
     """Run the selected sections."""
     parser = argparse.ArgumentParser(description=__doc__,
@@ -489,6 +543,8 @@ def main() -> None:
     parser.add_argument("--out", default="prbdm_speed_accuracy.png")
     parser.add_argument("--outdir", default=".")
     parser.add_argument("--quick", action="store_true", help="small versions of the sections")
+    parser.add_argument("--store", default=None,
+                        help="SQLite store of a 'pinflex batch prbdm' run (section 'study')")
     parser.add_argument("--json", default=None, metavar="FILE",
                         help="write the new sections' numbers to FILE as JSON")
     args = parser.parse_args()
@@ -518,6 +574,8 @@ def main() -> None:
             section_scf(args.seed, args.starts, args.quick, args.outdir)
         elif name == "equal":
             section_equal(args.seed, args.starts, args.quick)
+        elif name == "study":
+            section_study(args.store, args.outdir)
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(RESULTS, fh, indent=1, default=float)
