@@ -8,7 +8,8 @@ returning the exit status). A new subcommand is a new module and one line in
 Exit status: 0 on success; 2 for a user error (a :class:`~pinflex.exceptions.PinflexError`,
 reported as one line ``pinflex: error: ...`` on stderr, or an argparse usage error); 1 for an
 internal error (any other exception, reported as one line; ``--debug`` shows the traceback);
-130 when interrupted.
+130 when interrupted; 141 (as after SIGPIPE) without a word when the reader of standard output
+went away, as in ``pinflex modes ... | head``.
 """
 
 from __future__ import annotations
@@ -71,6 +72,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print("pinflex: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader closed the pipe: not an error of ours; stop writing, also at exit
+        import os
+
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
     except Exception as exc:  # noqa: BLE001 - the one place that turns bugs into a status
         if args.debug:
             raise
