@@ -661,7 +661,7 @@ class FlexibleModel:
         Returns:
             Frequencies [Hz], (k,) or (n, k).
         """
-        n_modes = self._check_modal_request(n_modes)
+        n_modes = self.check_n_modes(n_modes)
         Q = self.check_q(Q)
         check_modal(self.ndof, 1 if Q.ndim == 1 else Q.shape[0], "frequencies()")
         return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds)
@@ -693,7 +693,7 @@ class FlexibleModel:
             ConfigurationError: Wrong number of joint values or several poses.
             EigenSolverError: Singular mass matrix or an unrestrained structure.
         """
-        n_modes = self._check_modal_request(n_modes)
+        n_modes = self.check_n_modes(n_modes)
         if y is not None and not isinstance(y, dict):
             y = require_array(y, "design values y")
             if y.ndim == 2 and y.shape[0] == 1:
@@ -705,15 +705,21 @@ class FlexibleModel:
                 )
         return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds)
 
-    def _check_modal_request(self, n_modes):
-        """Refuse a model without elastic dof and a bad ``n_modes`` (None, or 1..nx)."""
-        if self.nx == 0:
+    def check_n_modes(self, n_modes):
+        """``n_modes`` checked: None, or an int >= 1 (capped at the number of modes).
+
+        Raises:
+            NoFlexibleLink: The model has no non-rigid mode (no beam and no joint spring).
+            ConfigurationError: ``n_modes`` is not an integer >= 1 (0, -1, 2.5, True, "3").
+        """
+        if self.n_elastic == 0:
             raise NoFlexibleLink(
-                f"robot '{self.description.name}' has no flexible link, so no elastic modes: "
+                f"robot '{self.description.name}' has no flexible link (nor joint spring), so "
+                "no elastic modes: "
                 f"declare one with <pinflex:flexible link=... elements=...> in the namespace "
                 f"{NAMESPACE} (links: {', '.join(self.description.links)})"
             )
         if n_modes is None:
             return None
         n = require_count(n_modes, "n_modes", minimum=1)
-        return min(n, self.nx)
+        return min(n, self.n_elastic)

@@ -349,6 +349,8 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         ConfigurationError: Modes outside 1..n_elastic, unknown names, a bad order or pose.
         RepeatedEigenvalue: a requested mode is (nearly) repeated at the expansion point.
     """
+    if model.n_elastic == 0:
+        model.check_n_modes(None)  # raises NoFlexibleLink, naming the robot
     raw = [modes] if isinstance(modes, int | np.integer | str) else list(np.ravel(modes))
     if not raw or any(isinstance(m, bool | str | np.bool_)
                       or not isinstance(m, int | np.integer | float | np.floating)
@@ -358,9 +360,12 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
     modes = tuple(int(m) for m in raw)
     if min(modes) < 1 or max(modes) > model.n_elastic:
         raise ConfigurationError(f"modes {modes} must lie in 1..{model.n_elastic}")
-    from pinflex.resources import check_order
+    from pinflex.resources import check_order, check_taylor
 
-    order = check_order(order)  # both jet routes: refused before any work
+    order = check_order(order)  # bounded before any work, whichever jet path runs
+    n_design = model.ny if design is None else len(design)
+    check_taylor((model.nv if joints is None else len(joints)) + n_design, order, model.ndof,
+                 n_design)
     jets_of = solver_matrix_jets if solve.supported(model) else matrix_jets
     space, M, K, jidx, didx = jets_of(model, q0, y0, order=order, joints=joints, design=design)
     idx = [model.n_rigid + m - 1 for m in modes]
