@@ -238,6 +238,7 @@ def size_for_floors(
         else:
             accept = margin > margin_old
         moved = float(np.max(np.abs(y_new[didx] - y[didx]) / span))
+        assert rho is not None  # set at the first expansion, before any step
         if accept:
             history.append((y_new.copy(), mass_new, margin))
             y, f_now, tm = y_new, f_new, None  # re-expand at the new design

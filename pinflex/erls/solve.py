@@ -263,8 +263,8 @@ def factored_twists(model, plan: SolvePlan, terms, alg):
         ``sources[k] = (tau, stop)`` with ``tau`` (lead, 6, stop) on the columns it can touch.
     """
     mm = alg.mm
-    twists = {model.plan.root: None}
-    sources = []
+    twists: dict[str, tuple | None] = {model.plan.root: None}
+    sources: list[tuple[np.ndarray, int]] = []
     for j, att in zip(model.plan.joints, plan.joint_attach):
         par = twists[j.parent]
         core = plan.cores.get(j.parent)
@@ -349,14 +349,14 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
                 M[:, :a, nx:] += X
                 M[:, nx:, :a] += np.swapaxes(X, -1, -2)
     # rigid carriers: composite 6 × 6 (and 6 × nv) blocks per source, one wide product each
-    comp = {}
+    comp: dict = {}
 
     def add_rigid(slot, link, G, GJ, W):
         """Carrier motion = G @ root twist + GJ @ q̇ (rows: 6 for an inertia, 3 for a mass).
 
         ``slot`` is -1 for M, or the design index whose Md the carrier goes to.
         """
-        target = M if slot < 0 else Md[slot]
+        target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
         if nv:
             target[:, nx:, nx:] += mm(np.swapaxes(GJ, -1, -2), W @ GJ)
         tw = twists[link]
@@ -380,6 +380,7 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
     for pm, att in zip(model.plan.point_masses, plan.pm_attach):
         name, link, xyz = pm.name, pm.link, pm.xyz
         design = name in design_index
+        value: float | np.ndarray
         if design and split:
             value, slot = 1.0, design_index[name]
         elif design:
@@ -391,7 +392,7 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
             value, slot = model.point_mass_values[name], -1
             if value == 0.0:
                 continue
-        target = M if slot < 0 else Md[slot]
+        target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
         gJ = (translate_twist(xyz) @ terms.jac[link])[:, :3]
         W = value * eye3 if np.ndim(value) == 0 else value
         if link in plan.cores:  # on a beam: its own coordinates and the root twist, explicit
@@ -409,7 +410,7 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
         else:
             add_rigid(slot, link, translate_twist(xyz)[:3], gJ, W)
     for (k, slot), (C, D) in comp.items():
-        target = M if slot < 0 else Md[slot]
+        target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
         tau, w = sources[k]
         tT = np.swapaxes(tau, -1, -2)
         target[:, :w, :w] += mm(tT, mm(C, tau))

@@ -353,8 +353,8 @@ def evaluate_with_jacobian(problem: MappingProblem, x: np.ndarray, workspace: Ch
         pos_err[~ok] = FAILED_LOAD_ERROR
         defl_res[~ok] = FAILED_LOAD_ERROR / np.sqrt(2.0)
         if warm is not None:
-            for index in np.flatnonzero(ok):
-                warm.angles[int(index)] = theta[index].copy()
+            for k_load in np.flatnonzero(ok):
+                warm.angles[int(k_load)] = theta[k_load].copy()
         if np.any(ok):
             q = np.cumsum(theta[ok], axis=1)
             tips[ok] = np.column_stack([s[0] + (ell * np.cos(q)).sum(1),
