@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+import reference_fe as ref
 import scipy.linalg
 
 from pinflex import FlexibleModel
@@ -18,7 +19,6 @@ from pinflex.dynamics import (
     vibration_report,
 )
 from pinflex.trajectory import Trajectory
-from tests import reference_fe as ref
 
 URDF = Path(__file__).resolve().parents[1] / "urdf"
 

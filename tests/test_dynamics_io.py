@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import reference_fe as ref
 
 from pinflex import FlexibleModel
 from pinflex.dynamics import ErlsDynamics
@@ -14,7 +15,6 @@ from pinflex.dynamics.frf import frf, frf_direct, linear_pose
 from pinflex.dynamics.simulate import Damping, energy, simulate_torque
 from pinflex.dynamics.study import InvalidSimulationTable, parse_simulation_table
 from pinflex.exceptions import ConfigurationError, PinflexError
-from tests import reference_fe as ref
 
 URDF = Path(__file__).resolve().parents[1] / "urdf"
 
