@@ -236,3 +236,16 @@ def test_slow_tip_force_gives_the_static_compliance(arm):
     u = Tm @ np.linalg.solve(Tm.T @ K @ Tm, Tm.T @ f)
     assert rep.deflection_m[-1, :2] == pytest.approx(u[[20, 21]], rel=1e-3,
                                                      abs=1e-3 * abs(u[21]))
+
+
+@pytest.mark.parametrize("setting, named", [("nosuch=1", "nosuch"), ("m1=0.3", "m1")])
+def test_simulate_command_takes_set_and_checks_it(tmp_path, capsys, setting, named):
+    """`pinflex simulate --set` reaches the model: unknown names and out-of-bounds values fail."""
+    from pinflex.cli import main
+
+    study = tmp_path / "s.toml"
+    study.write_text('robot = "builtin:two_link.urdf"\nplanar = true\n[[targets]]\nmode = 1\n'
+                     'freq_hz = 190.0\n[simulation]\ndrive = "prescribed"\n')
+    assert main(["simulate", str(study), "--json", "--set", setting]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and named in err[0]

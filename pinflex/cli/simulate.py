@@ -8,6 +8,8 @@ import sys
 import time
 from typing import Any
 
+from pinflex.cli.common import add_model_arguments, parse_values
+
 
 def add_parser(sub) -> None:
     """Register the ``simulate`` subcommand on an ``argparse`` subparsers object."""
@@ -21,11 +23,18 @@ def add_parser(sub) -> None:
     p.add_argument("--exaggeration", type=float, default=200.0,
                    help="with --out: factor on the elastic motion in the meshcat playback pages "
                    "(0: no playback; default 200)")
+    add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_simulate)
 
 
-def run_study(path) -> tuple[list, list, Any, Any]:
+def run_study(path, joints: str | None = None,
+              values: dict[str, float] | None = None) -> tuple[list, list, Any, Any]:
     """Assign the study's design, then simulate the baseline and the assigned design.
+
+    Args:
+        path: Study TOML with a ``[simulation]`` table.
+        joints: Joint conditions overriding the study's ``joints`` key (``--joints``).
+        values: Parameter values overriding and adding to the study's ``values`` (``--set``).
 
     Returns:
         ``(reports, [(simulation, dynamics)], settings, assignment result)``.
@@ -34,6 +43,10 @@ def run_study(path) -> tuple[list, list, Any, Any]:
     from pinflex.dynamics.study import load_simulation_study, simulate_design
 
     cfg, settings = load_simulation_study(path)
+    if joints is not None:
+        cfg.joints = joints
+    if values:
+        cfg.values = {**(cfg.values or {}), **values}
     model, traj, result = run_config(cfg)
     designs = [("baseline", result.y_before), ("assigned", result.y)]
     reports, sims = [], []
@@ -47,7 +60,8 @@ def run_study(path) -> tuple[list, list, Any, Any]:
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Run ``pinflex simulate``."""
     t0 = time.perf_counter()
-    reports, sims, settings, result = run_study(args.config)
+    reports, sims, settings, result = run_study(
+        args.config, args.joints, parse_values(args.set) if args.set else None)
     total = time.perf_counter() - t0
     files: list[str] = []
     if args.out:
