@@ -33,11 +33,19 @@ SUBCOMMANDS: list[str] = [
 ]
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one line, like every other error."""
+
+    def error(self, message: str):  # type: ignore[override]
+        """Print ``pinflex SUBCOMMAND: error: ...`` and the way to help; exit with status 2."""
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``pinflex`` command, with every registered subcommand."""
     from pinflex import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="pinflex",
         description="Flexible-link robots on Pinocchio: modal analysis, Taylor modal models, "
         "eigenfrequency assignment, pseudo-rigid-body models.",

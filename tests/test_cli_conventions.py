@@ -1,4 +1,4 @@
-"""The command line stays quiet when the reader of its output goes away (``| head``)."""
+"""Command-line conventions: one line per error, quiet when the reader goes away."""
 
 from __future__ import annotations
 
@@ -22,3 +22,17 @@ def test_closed_stdout_is_not_an_internal_error():
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 141, err.decode()
     assert err.decode() == ""
+
+
+def test_usage_errors_are_one_line(capsys):
+    """An argparse usage error is one line naming the subcommand and the way to help; status 2."""
+    import pytest
+
+    from pinflex.cli import main
+
+    with pytest.raises(SystemExit) as info:
+        main(["modes", "robot.urdf", "--modes", "abc"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["pinflex modes: error: argument --modes: invalid int value: 'abc' "
+                   "(see 'pinflex modes --help')"]
