@@ -36,7 +36,7 @@ SUBCOMMANDS: list[str] = [
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose usage errors are one line, like every other error."""
 
-    def error(self, message: str):  # type: ignore[override]
+    def error(self, message: str):
         """Print ``pinflex SUBCOMMAND: error: ...`` and the way to help; exit with status 2."""
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
