@@ -18,9 +18,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from pinflex.erls import FlexibleModel, solve
-from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
+from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
-from pinflex.parametric.matrices import pose_jets
+from pinflex.parametric.matrices import expansion_variables, pose_jets
 
 
 @lru_cache(maxsize=16)
@@ -89,23 +89,8 @@ def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     Same arguments and returns as :func:`pinflex.parametric.matrix_jets`; only the
     coordinates of the matrices differ (their eigenvalues are the same).
     """
-    q0 = model.check_q(q0).astype(float)
-    if q0.ndim != 1:
-        raise ConfigurationError("the expansion point must be a single pose")
-    y0 = model.check_y(y0)
-    joint_idx = [model.joint_index(n) for n in (model.joint_names if joints is None else joints)]
-    names = model.design_names if design is None else tuple(design)
-    design_idx = []
-    for n in names:
-        if n not in model.design_names:
-            raise DesignVariableNotFound(n, model.design_names)
-        design_idx.append(model.design_names.index(n))
-    nvars = len(joint_idx) + len(design_idx)
-    if nvars == 0:
-        raise ConfigurationError("expand at least one joint or design variable")
-    if order < 0:
-        raise ConfigurationError(f"order = {order} must be >= 0")
-    space = JetSpace(nvars, int(order))
+    q0, y0, joint_idx, design_idx, order = expansion_variables(model, q0, y0, order, joints, design)
+    space = JetSpace(len(joint_idx) + len(design_idx), int(order))
     nj, nd = len(joint_idx), len(design_idx)
     if nj:
         qspace = JetSpace(nj, int(order))

@@ -100,21 +100,17 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
     return PoseTerms(jac, rot, slide)
 
 
-def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
-                joints: Sequence[str] | None = None, design: Sequence[str] | None = None):
-    """Exact Taylor coefficients of ``M(q, y)`` and ``K(q, y)`` at ``(q0, y0)``.
-
-    Args:
-        model: The flexible model.
-        q0: Expansion pose (user coordinates) [rad or m], (nv,).
-        y0: Expansion design values [kg] (default nominal).
-        order: Truncation order p.
-        joints: Names of the joints to expand (default all).
-        design: Names of the design variables to expand (default all).
+def expansion_variables(model: FlexibleModel, q0, y0, order: int,
+                        joints: Sequence[str] | None, design: Sequence[str] | None):
+    """Check an expansion point and name its variables (shared by both jet routes).
 
     Returns:
-        ``(space, M_jet, K_jet, joint_idx, design_idx)``: jets of shape (ncoef, ndof, ndof);
-        the variables are the listed joints then the listed design variables, in order.
+        ``(q0, y0, joint_idx, design_idx, order)``: the checked pose (nv,) and design, the
+        indices of the expanded joints and design variables, and the checked order.
+
+    Raises:
+        ConfigurationError: For several poses, no variable, or an order out of range.
+        DesignVariableNotFound: For an unknown design name.
     """
     q0 = model.check_q(q0).astype(float)
     if q0.ndim != 1:
@@ -132,7 +128,27 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
         raise ConfigurationError("expand at least one joint or design variable")
     order = check_order(order)
     check_taylor(nvars, order, model.ndof, len(design_idx))
-    space = JetSpace(nvars, int(order))
+    return q0, y0, joint_idx, design_idx, order
+
+
+def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
+                joints: Sequence[str] | None = None, design: Sequence[str] | None = None):
+    """Exact Taylor coefficients of ``M(q, y)`` and ``K(q, y)`` at ``(q0, y0)``.
+
+    Args:
+        model: The flexible model.
+        q0: Expansion pose (user coordinates) [rad or m], (nv,).
+        y0: Expansion design values [kg] (default nominal).
+        order: Truncation order p.
+        joints: Names of the joints to expand (default all).
+        design: Names of the design variables to expand (default all).
+
+    Returns:
+        ``(space, M_jet, K_jet, joint_idx, design_idx)``: jets of shape (ncoef, ndof, ndof);
+        the variables are the listed joints then the listed design variables, in order.
+    """
+    q0, y0, joint_idx, design_idx, order = expansion_variables(model, q0, y0, order, joints, design)
+    space = JetSpace(len(joint_idx) + len(design_idx), int(order))
     nj, nd = len(joint_idx), len(design_idx)
     # The pose terms depend on the joints only: assemble in the joints' own (smaller) jet
     # space, then embed. Design masses enter M linearly: δy_j shifts coefficients by e_j.
