@@ -204,18 +204,11 @@ def eigenpairs(model, Q, y=None, *, n_modes: int | None = None, check_bounds: bo
         EigenSolverError: the condensed mass is not positive definite or an elastic
             eigenvalue is not positive (an unrestrained or degenerate structure).
     """
-    from pinflex.erls.modal import reduced
+    from pinflex.erls.modal import cholesky_standard_form
 
     Q = np.atleast_2d(model.check_q(Q))
     M, K = model.matrices(Q, y, check_bounds=check_bounds)
-    Mred, Kxx = reduced(model, M, K)
-    try:
-        L = np.linalg.cholesky(Mred)
-    except np.linalg.LinAlgError as exc:
-        raise EigenSolverError("the condensed elastic mass matrix is not positive") from exc
-    Li = np.linalg.inv(L)
-    A = Li @ Kxx @ np.swapaxes(Li, -1, -2)
-    A = 0.5 * (A + np.swapaxes(A, -1, -2))
+    Mred, Li, A = cholesky_standard_form(model, M, K)
     lam, Z = np.linalg.eigh(A)
     k = model.n_elastic if n_modes is None else min(int(n_modes), model.n_elastic)
     lam, Z = lam[:, :k], Z[:, :, :k]

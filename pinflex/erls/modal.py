@@ -172,10 +172,16 @@ def _frequencies_nodal(model, Q, y=None, *, n_modes: int | None = None, check_bo
     return np.sqrt(lam) / (2.0 * np.pi)
 
 
-def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
-    """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof)."""
-    if model.n_elastic == 0:
-        return np.zeros(M.shape[:-2] + (0,))
+def cholesky_standard_form(model, M: np.ndarray, K: np.ndarray):
+    """The reduced pencil (K_xx, M_red) of stacked pairs in standard form A = L⁻¹ K_xx L⁻ᵀ.
+
+    Returns:
+        ``(Mred, Li, A)``: the condensed elastic mass, ``L⁻¹`` of its Cholesky factor and the
+        symmetric standard-form matrix, each (..., nx, nx).
+
+    Raises:
+        EigenSolverError: If the reduced elastic mass matrix is not positive definite.
+    """
     Mred, Kxx = reduced(model, M, K)
     try:
         L = np.linalg.cholesky(Mred)
@@ -183,6 +189,14 @@ def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
         raise EigenSolverError("the reduced elastic mass matrix is not positive") from exc
     Li = np.linalg.inv(L)
     A = Li @ Kxx @ np.swapaxes(Li, -1, -2)
+    return Mred, Li, 0.5 * (A + np.swapaxes(A, -1, -2))
+
+
+def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof)."""
+    if model.n_elastic == 0:
+        return np.zeros(M.shape[:-2] + (0,))
+    _, Li, A = cholesky_standard_form(model, M, K)
     lam = np.linalg.eigvalsh(A)
     if np.any(lam <= 0.0):
         raise EigenSolverError(
