@@ -25,7 +25,15 @@ import numpy as np
 
 from pinflex.exceptions import InvalidBeamProperty
 
-_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)
+# 5-point Gauss-Legendre rule on [-1, 1] in closed form (numpy.polynomial costs start-up time)
+_GAUSS_X = np.array([-np.sqrt(5.0 + 2.0 * np.sqrt(10.0 / 7.0)) / 3.0,
+                     -np.sqrt(5.0 - 2.0 * np.sqrt(10.0 / 7.0)) / 3.0, 0.0,
+                     np.sqrt(5.0 - 2.0 * np.sqrt(10.0 / 7.0)) / 3.0,
+                     np.sqrt(5.0 + 2.0 * np.sqrt(10.0 / 7.0)) / 3.0])
+_GAUSS_W = np.array([(322.0 - 13.0 * np.sqrt(70.0)) / 900.0,
+                     (322.0 + 13.0 * np.sqrt(70.0)) / 900.0, 128.0 / 225.0,
+                     (322.0 + 13.0 * np.sqrt(70.0)) / 900.0,
+                     (322.0 - 13.0 * np.sqrt(70.0)) / 900.0])
 _GAUSS_XI = 0.5 * (_GAUSS_X + 1.0)
 _GAUSS_WXI = 0.5 * _GAUSS_W
 

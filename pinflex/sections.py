@@ -25,7 +25,6 @@ import math
 from dataclasses import dataclass, field
 
 from pinflex.exceptions import InvalidBeamProperty
-from pinflex.jets.scalar import value_of
 
 SHAPES = {
     "solid_circle": ("diameter",),
@@ -113,6 +112,8 @@ def section_limits(inputs: PropertyInputs, get) -> dict:
 
 
 def _value(x):
+    from pinflex.jets.scalar import value_of  # jets load only with a rectangle section
+
     try:
         return value_of(x)
     except TypeError:  # an array of values: the branch is decided by the first entry

@@ -8,7 +8,6 @@ helpers. Nothing here knows about robots.
 
 from __future__ import annotations
 
-import difflib
 import math
 import re
 import warnings
@@ -30,6 +29,8 @@ INTEGER = re.compile(r"^[+-]?\d+$")
 
 def closest(name: str, valid: Iterable[str]) -> str | None:
     """The valid name closest to ``name`` (``difflib``), or ``None`` if none is close."""
+    import difflib  # only on the error path: keeps start-up light
+
     valid = list(valid)
     hits = difflib.get_close_matches(name, valid, n=1, cutoff=0.6)
     if not hits:  # case slips ("e" for "E") and prefixes ("low" for "lower")

@@ -3,7 +3,8 @@
 Each subcommand lives in its own module of this package and registers itself with an
 ``add_parser(subparsers)`` function that sets ``func`` (a function of the parsed arguments
 returning the exit status). A new subcommand is a new module and one line in
-:data:`SUBCOMMANDS`.
+:data:`SUBCOMMANDS`. A run imports only the module of the subcommand it names (start-up
+stays that of the work asked for); ``pinflex --help`` and unknown names load them all.
 
 Exit status: 0 on success; 2 for a user error (a :class:`~pinflex.exceptions.PinflexError`,
 reported as one line ``pinflex: error: ...`` on stderr, or an argparse usage error); 1 for an
@@ -41,8 +42,27 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``pinflex`` command, with every registered subcommand."""
+def chosen_subcommand(argv: Sequence[str]) -> str | None:
+    """The registered subcommand ``argv`` names, or None (help, version, none or unknown).
+
+    The top-level options take no value, so the first word not starting with ``-`` is the
+    subcommand.
+    """
+    for word in argv:
+        if word in ("-h", "--help"):
+            return None
+        if not word.startswith("-"):
+            return word if word in SUBCOMMANDS else None
+    return None
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser of the ``pinflex`` command.
+
+    Args:
+        only: Register just this subcommand (its module alone is imported); default: all
+            of :data:`SUBCOMMANDS`.
+    """
     from pinflex import __version__
 
     parser = _Parser(
@@ -54,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true",
                         help="show the full traceback of an error instead of one line")
     sub = parser.add_subparsers(dest="command", required=True)
-    for name in SUBCOMMANDS:
+    for name in SUBCOMMANDS if only is None else [only]:
         importlib.import_module(f"pinflex.cli.{name}").add_parser(sub)
     return parser
 
@@ -67,7 +87,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     from pinflex.exceptions import PinflexError
 
-    args = build_parser().parse_args(argv)
+    words = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser(chosen_subcommand(words)).parse_args(words)
     try:
         return int(args.func(args) or 0)
     except PinflexError as exc:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 import numpy as np
 
@@ -79,6 +78,8 @@ def cmd_modes(args: argparse.Namespace) -> int:
                                "estimated_error": fidelity.estimate.tolist(),
                                "observed_order": fidelity.order.tolist(),
                                "estimate": "Richardson from three uniform refinements"}
+        import json
+
         print(json.dumps(out))
         return 0
     print(f"{model.description.name}: {model.ndof} dof ({model.nx} elastic + "
