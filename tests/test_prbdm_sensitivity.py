@@ -16,6 +16,7 @@ from pinflex.prbdm.sensitivity import (
     mass_structure,
     planar_statics,
     pose_mass_matrix,
+    residuals_and_jacobian,
 )
 
 
@@ -124,3 +125,37 @@ def test_warm_starts_are_explicit_and_do_not_change_answers(beam_truth):
     np.testing.assert_allclose(again.evaluation.residuals, cold.evaluation.residuals,
                                rtol=0, atol=1e-9)
     assert first.evaluation.failed_loads == 0
+
+
+@pytest.mark.parametrize("law, poses", [("segment", "straight"), ("paper", "paper")])
+def test_lazy_jacobian_equals_the_full_evaluation(beam_truth, law, poses):
+    """The fit's inner loop (residuals now, Jacobian on demand) is the full evaluation."""
+    beam, truth = beam_truth
+    problem = build_problem(beam, 3, 3, poses, law, truth)
+    x = _design(problem, 5)
+    full = evaluate_with_jacobian(problem, x, ChainWorkspace(beam, 3))
+    res, jacobian = residuals_and_jacobian(problem, x, ChainWorkspace(beam, 3))
+    np.testing.assert_allclose(res, full.evaluation.residuals, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(jacobian(), full.jacobian, rtol=1e-10, atol=1e-12)
+
+
+def test_warm_start_prediction_is_second_order(beam_truth):
+    """The predicted start base + slopes dx misses the converged angles by O(|dx|^2)."""
+    beam, truth = beam_truth
+    problem = build_problem(beam, 3, 3, "straight", "segment", truth)
+    x = _design(problem, 7)
+    warm = WarmStarts()
+    _, jacobian = residuals_and_jacobian(problem, x, ChainWorkspace(beam, 3), warm)
+    jacobian()                                       # keeps the base angles and slopes
+    direction = np.random.default_rng(1).normal(size=x.size)
+    misses = []
+    for h in (1e-2, 5e-3):
+        x_new = x + h * direction
+        predicted = np.array([warm.start(k, x_new) for k in range(3)])
+        cold = WarmStarts()
+        residuals_and_jacobian(problem, x_new, ChainWorkspace(beam, 3), cold)
+        exact = np.array([cold.angles[k] for k in range(3)])
+        misses.append(np.max(np.abs(predicted - exact)))
+        base = np.array([warm.base[k] for k in range(3)])
+        assert misses[-1] < 0.1 * np.max(np.abs(exact - base))  # far better than no prediction
+    assert 3.0 < misses[0] / misses[1] < 5.0             # halving the step quarters the miss

@@ -298,22 +298,33 @@ def _partial_integrals(planform: Planform, s_m: np.ndarray) -> np.ndarray:
     """Integrals from 0 to each s of (w, w x, w x^2, w^3, 1/I), shape (len(s), 5).
 
     Whole planform pieces come from a cumulative table; the last partial piece is integrated
-    exactly (3-point Gauss for the polynomials, the logarithmic mean for 1/I).
+    exactly (3-point Gauss for the polynomials, the logarithmic mean for 1/I). The width is
+    linear on the piece, so it is evaluated from the piece's end values directly.
     """
     x = planform.x_m
     piece = np.clip(np.searchsorted(x, s_m, side="right") - 1, 0, x.size - 2)
     table = planform._cumulative_integrals
     left = x[piece]
     span = s_m - left
-    q = left[:, None] + 0.5 * span[:, None] * (_GAUSS3_X + 1.0)
-    w = planform.width_m(q)
+    w_left = 2.0 * planform.half_width_m[piece]
+    slope = (2.0 * planform.half_width_m[piece + 1] - w_left) / (x[piece + 1] - left)
+    offset = 0.5 * span[:, None] * (_GAUSS3_X + 1.0)
+    q = left[:, None] + offset
+    w = w_left[:, None] + slope[:, None] * offset
     gw = 0.5 * span[:, None] * _GAUSS3_W
-    i_left, i_right = planform.area_moment_m4(left), planform.area_moment_m4(s_m)
-    partial = np.column_stack([
-        (gw * w).sum(1), (gw * w * q).sum(1), (gw * w * q * q).sum(1), (gw * w**3).sum(1),
-        span * _log_mean_inverse(i_left, i_right),
-    ])
-    return table[piece] + partial
+    gww = gw * w
+    cubed = planform.thickness_m**3 / 12.0
+    if planform.thickness_profile_m is None:
+        i_left, i_right = w_left * cubed, (w_left + slope * span) * cubed
+    else:
+        i_left, i_right = planform.area_moment_m4(left), planform.area_moment_m4(s_m)
+    out = np.empty((s_m.size, 5))
+    out[:, 0] = gww.sum(1)
+    out[:, 1] = (gww * q).sum(1)
+    out[:, 2] = (gww * q * q).sum(1)
+    out[:, 3] = (gww * w * w).sum(1)
+    out[:, 4] = span * _log_mean_inverse(i_left, i_right)
+    return table[piece] + out
 
 
 def compliance_between(planform: Planform, bounds_m: np.ndarray) -> np.ndarray:
@@ -322,8 +333,15 @@ def compliance_between(planform: Planform, bounds_m: np.ndarray) -> np.ndarray:
     s_m = np.asarray(bounds_m, dtype=float)
     piece = np.clip(np.searchsorted(x, s_m, side="right") - 1, 0, x.size - 2)
     left = x[piece]
-    inv = planform._cumulative_integrals[piece, 4] + (s_m - left) * _log_mean_inverse(
-        planform.area_moment_m4(left), planform.area_moment_m4(s_m))
+    span = s_m - left
+    if planform.thickness_profile_m is None:
+        cubed = planform.thickness_m**3 / 12.0
+        w_left = 2.0 * planform.half_width_m[piece]
+        slope = (2.0 * planform.half_width_m[piece + 1] - w_left) / (x[piece + 1] - left)
+        i_left, i_right = w_left * cubed, (w_left + slope * span) * cubed
+    else:
+        i_left, i_right = planform.area_moment_m4(left), planform.area_moment_m4(s_m)
+    inv = planform._cumulative_integrals[piece, 4] + span * _log_mean_inverse(i_left, i_right)
     return np.diff(inv) / planform.material.youngs_modulus_pa
 
 

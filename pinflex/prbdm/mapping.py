@@ -22,6 +22,7 @@ simplex equality (15b) is a residual on the fractions' sum, to which the losses 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -42,7 +43,12 @@ from .problem import (
     evaluate,
     static_stiffness,
 )
-from .sensitivity import ChainWorkspace, WarmStarts, evaluate_with_jacobian
+from .sensitivity import (
+    ChainWorkspace,
+    WarmStarts,
+    evaluate_with_jacobian,
+    residuals_and_jacobian,
+)
 
 JACOBIANS = ("analytic", "finite-difference")
 
@@ -85,6 +91,8 @@ class PrbdmFit:
             :class:`~pinflex.prbdm.problem.MappingProblem`).
         eq15a_sum: Eq. (15a) with eq. (16) summed over this fit's own poses [-].
         eq15a_mean: The same divided by the number of poses [-].
+        n_evaluations: Residual evaluations spent by all searches of the fit (finite
+            differences included; one analytic evaluation yields residuals and Jacobian).
     """
 
     beam: str
@@ -117,6 +125,7 @@ class PrbdmFit:
     metrics: str = "pinflex"
     eq15a_sum: float = float("nan")
     eq15a_mean: float = float("nan")
+    n_evaluations: int = 0
 
     @property
     def exactly_determined(self) -> bool:
@@ -183,7 +192,8 @@ class Objective:
             if jacobian == "analytic" else None
         self.n_eig = problem.poses.shape[0] * problem.n_modes
         self.n_evaluations = 0
-        self._cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._cache: tuple[np.ndarray, np.ndarray, Callable[[], np.ndarray]] | None = None
+        self._jac: tuple[tuple, np.ndarray] | None = None
 
     def _weighted(self, res: np.ndarray, x: np.ndarray) -> np.ndarray:
         n1 = self.problem.n_joints + 1
@@ -193,22 +203,15 @@ class Objective:
         parts.append(np.array([np.sum(x[:n1]) - 1.0]))
         return np.concatenate(parts)
 
-    def _compute(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _compute(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, Callable[[], np.ndarray]]:
         if self._cache is not None and np.array_equal(self._cache[0], x):
             return self._cache
         self.n_evaluations += 1
-        n1 = self.problem.n_joints + 1
         assert self.workspace is not None
-        je = evaluate_with_jacobian(self.problem, x, self.workspace, self.warm,
-                                    deflection=self.w_defl > 0.0, pinocchio=False)
-        jac = je.jacobian
-        rows = [np.sqrt(self.w_eig) * jac[: self.n_eig]]
-        if self.w_defl > 0.0:
-            rows.append(np.sqrt(self.w_defl) * jac[self.n_eig:])
-        gauge = np.zeros((1, x.size))
-        gauge[0, :n1] = 1.0
-        rows.append(gauge)
-        self._cache = (np.array(x), self._weighted(je.evaluation.residuals, x), np.vstack(rows))
+        res, jacobian = residuals_and_jacobian(self.problem, x, self.workspace, self.warm,
+                                               deflection=self.w_defl > 0.0)
+        self._cache = (np.array(x), self._weighted(res, x), jacobian)
+        self._jac = None
         return self._cache
 
     def fun(self, x: np.ndarray) -> np.ndarray:
@@ -220,8 +223,21 @@ class Objective:
         return self._weighted(ev.residuals, x)
 
     def jac(self, x: np.ndarray) -> np.ndarray:
-        """Exact Jacobian of :meth:`fun` at x (analytic path only)."""
-        return self._compute(x)[2]
+        """Exact Jacobian of :meth:`fun` at x (analytic path only), formed on first request."""
+        cached = self._compute(x)
+        if self._jac is not None and self._jac[0] is cached:
+            return self._jac[1]
+        jac = cached[2]()
+        n1 = self.problem.n_joints + 1
+        rows = [np.sqrt(self.w_eig) * jac[: self.n_eig]]
+        if self.w_defl > 0.0:
+            rows.append(np.sqrt(self.w_defl) * jac[self.n_eig:])
+        gauge = np.zeros((1, x.size))
+        gauge[0, :n1] = 1.0
+        rows.append(gauge)
+        full = np.vstack(rows)
+        self._jac = (cached, full)
+        return full
 
 
 def _bounds(problem: MappingProblem) -> tuple[np.ndarray, np.ndarray]:
@@ -254,19 +270,33 @@ def start_points(problem: MappingProblem, n_starts: int, seed: int) -> np.ndarra
     return np.array(starts)
 
 
+#: Tolerance of the eigen-only searches that only seed a combined search: they stop on the
+#: frequency-matching manifold at 1e-8 instead of round-off (fewer evaluations; the combined
+#: search then leaves the manifold anyway, and its optimum is the same).
+SEED_TOL = 1e-8
+
+
 def _local(problem: MappingProblem, kind: str, x0: np.ndarray, weight: float | None = None,
-           max_nfev: int | None = None, jacobian: str = "analytic") -> np.ndarray:
-    """Bounded trust-region least squares (scipy ``least_squares``, 'trf') from x0."""
+           max_nfev: int | None = None, jacobian: str = "analytic",
+           tol: float | None = None, counter: list[int] | None = None) -> np.ndarray:
+    """Bounded trust-region least squares (scipy ``least_squares``, 'trf') from x0.
+
+    ``counter[0]`` (when given) is increased by the residual evaluations spent, including
+    those of finite differences.
+    """
     lower, upper = _bounds(problem)
     x0 = np.clip(x0, lower + 1e-12, upper - 1e-12)
     # A perfect frequency fit is reachable, so eigen-only runs to round-off; with deflection the
     # optimum has a non-zero residual and a relative cost change of 1e-9 is plenty.
-    tol = 1e-12 if kind == "eigen" else 1e-9
+    if tol is None:
+        tol = 1e-12 if kind == "eigen" else 1e-9
     objective = Objective(problem, kind, weight, jacobian)
     jac = objective.jac if jacobian == "analytic" else "2-point"
     result = least_squares(objective.fun, x0, jac=jac, bounds=(lower, upper),
                            method="trf", ftol=tol, xtol=tol, gtol=tol,
                            max_nfev=max_nfev or (40 if kind == "eigen" else 10) * problem.n_params)
+    if counter is not None:
+        counter[0] += objective.n_evaluations
     x = np.asarray(result.x, dtype=float)
     n1 = problem.n_joints + 1
     x[:n1] = np.clip(x[:n1], MIN_FRACTION, 1.0 - MIN_FRACTION)
@@ -301,7 +331,8 @@ def _score(ev: Evaluation, kind: str, metrics: str = "pinflex") -> float:
 
 def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int = 0,
                progress: bool = False, starts: np.ndarray | None = None,
-               keep_all: bool = False, jacobian: str = "analytic"):
+               keep_all: bool = False, jacobian: str = "analytic", tol: float | None = None,
+               counter: list[int] | None = None):
     """Best local least-squares solution over multistart points for one objective.
 
     Args:
@@ -313,6 +344,9 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
         starts: Explicit start designs, shape (k, n_params).
         keep_all: Return every successful local solution, best first, instead of the best.
         jacobian: ``"analytic"`` or ``"finite-difference"`` (see :class:`Objective`).
+        tol: Optimiser tolerances (ftol = xtol = gtol); default 1e-12 for eigen-only, 1e-9
+            with deflection.
+        counter: ``counter[0]`` is increased by the residual evaluations spent.
 
     Returns:
         ``(x, evaluation)`` of the best solution, or the list of all of them.
@@ -325,7 +359,7 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
     bar = ProgressBar(len(points), f"{problem.n_joints}R {kind}", progress)
     for x0 in points:
         try:
-            x = _local(problem, kind, x0, jacobian=jacobian)
+            x = _local(problem, kind, x0, jacobian=jacobian, tol=tol, counter=counter)
             ev = final_evaluation(problem, x, jacobian)
         except (InvalidChain, np.linalg.LinAlgError, ValueError):
             bar.update(best=min((_score(e, kind, problem.metrics) for _, e in found),
@@ -345,7 +379,8 @@ def multistart(problem: MappingProblem, kind: str, n_starts: int = 16, seed: int
 def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.ndarray,
                  n_points: int = 7, progress: bool = False,
                  extra: list | None = None,
-                 jacobian: str = "analytic") -> list[tuple[np.ndarray, Evaluation]]:
+                 jacobian: str = "analytic", counter: list[int] | None = None
+                 ) -> list[tuple[np.ndarray, Evaluation]]:
     """Weighted-sum Pareto front between the eigen and deflection anchors.
 
     For weights w evenly spaced in (0, 1), minimise :math:`w e_{eig}^2 + (1 - w) e_{defl}^2`,
@@ -363,7 +398,8 @@ def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.
         best = None
         for x0 in (previous, hub):
             try:
-                x = _local(problem, "weighted", x0, weight=weight, jacobian=jacobian)
+                x = _local(problem, "weighted", x0, weight=weight, jacobian=jacobian,
+                           counter=counter)
             except (InvalidChain, np.linalg.LinAlgError, ValueError):
                 continue
             ev = final_evaluation(problem, x, jacobian)
@@ -425,24 +461,28 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         raise InvalidChain(f"objective = {objective!r}; expected one of {OBJECTIVES}")
     problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth, metrics)
     front: list[tuple[np.ndarray, Evaluation]] = []
+    count = [0]
     if objective in ("pareto", "combined"):
         eigen_all = multistart(problem, "eigen", n_starts, seed, progress, keep_all=True,
-                               jacobian=jacobian)
+                               jacobian=jacobian, counter=count,
+                               tol=SEED_TOL if objective == "combined" else None)
         x_e = eigen_all[0][0]
         # Homotopy from the frequency-matching manifold: the eigen solutions that already
         # deflect best are the starts of the combined search.
         seeds = sorted(eigen_all, key=lambda p: p[1].combined_error)[: max(2, n_starts // 2)]
         x, ev = multistart(problem, "combined", starts=np.array([p[0] for p in seeds]),
-                           progress=progress, jacobian=jacobian)
+                           progress=progress, jacobian=jacobian, counter=count)
         if objective == "pareto":
             x_d, _ = multistart(problem, "deflection", progress=progress,
-                                starts=np.array([x, seeds[0][0]]), jacobian=jacobian)
+                                starts=np.array([x, seeds[0][0]]), jacobian=jacobian,
+                                counter=count)
             front = pareto_front(problem, x_e, x_d, pareto_points, progress, extra=[(x, ev)],
-                                 jacobian=jacobian)
+                                 jacobian=jacobian, counter=count)
             x, ev = min(front + [(x, ev)], key=lambda p: p[1].combined_error)
     else:
-        x, ev = multistart(problem, objective, n_starts, seed, progress, jacobian=jacobian)
-    return _make_fit(problem, x, ev, objective, n_starts, front)
+        x, ev = multistart(problem, objective, n_starts, seed, progress, jacobian=jacobian,
+                           counter=count)
+    return _make_fit(problem, x, ev, objective, n_starts, front, count[0])
 
 
 def determinacy_counts(problem: MappingProblem, objective: str) -> tuple[int, int]:
@@ -455,7 +495,7 @@ def determinacy_counts(problem: MappingProblem, objective: str) -> tuple[int, in
 
 
 def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective: str,
-              n_starts: int, front: list) -> PrbdmFit:
+              n_starts: int, front: list, n_evaluations: int = 0) -> PrbdmFit:
     gamma, factors = decode(problem, x)
     gamma = gamma / gamma.sum()
     stiffness = static_stiffness(problem, gamma, factors)
@@ -483,4 +523,5 @@ def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective:
         n_free_parameters=n_free, n_matched=n_matched,
         determinacy="exactly determined" if n_free >= n_matched else "over-determined",
         metrics=problem.metrics, eq15a_sum=ev.eq15a_sum, eq15a_mean=ev.eq15a_mean,
+        n_evaluations=int(n_evaluations),
     )

@@ -28,6 +28,7 @@ every answer passes the same convergence and branch checks.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,13 +41,40 @@ from .problem import FAILED_LOAD_ERROR, Evaluation, MappingProblem
 
 @dataclass
 class WarmStarts:
-    """Last converged joint angles per load index, passed explicitly to evaluations."""
+    """Last converged joint angles per load index, passed explicitly to evaluations.
+
+    ``angles`` are the last answers. When a Jacobian was formed, its design ``base_x``, the
+    angles there and their implicit-function derivatives ``slopes`` by the design are kept,
+    and the next start is the first-order prediction ``base + slopes (x_new - base_x)``.
+    """
 
     angles: dict[int, np.ndarray] = field(default_factory=dict)
+    base: dict[int, np.ndarray] = field(default_factory=dict)
+    slopes: dict[int, np.ndarray] = field(default_factory=dict)
+    base_x: np.ndarray | None = None
 
     def clear(self) -> None:
         """Forget every stored start."""
         self.angles.clear()
+        self.base.clear()
+        self.slopes.clear()
+        self.base_x = None
+
+    def set_base(self, x: np.ndarray, angles: dict[int, np.ndarray],
+                 slopes: dict[int, np.ndarray]) -> None:
+        """Keep the angles at design x and their derivatives (n, n_params) per load."""
+        self.base_x = np.array(x, dtype=float)
+        self.base = {k: np.array(v) for k, v in angles.items()}
+        self.slopes = slopes
+
+    def start(self, index: int, x: np.ndarray) -> np.ndarray:
+        """Start angles of load ``index`` for design x (requires ``index in angles``)."""
+        slope = self.slopes.get(index)
+        if slope is None or self.base_x is None or self.base_x.shape != x.shape:
+            return self.angles[index]
+        step = slope @ (x - self.base_x)
+        # A long extrapolation is no better than the last answer: keep predictions small.
+        return self.base[index] + step if np.max(np.abs(step)) < 0.2 else self.angles[index]
 
 
 def _thickness(planform: Planform, s: np.ndarray) -> np.ndarray:
@@ -135,13 +163,17 @@ def link_moments(planform: Planform, s: np.ndarray, links: tuple):
     rho_a = rho * planform.area_m2(ends)
     t2 = _thickness(planform, ends) ** 2 / 12.0
     dmu = np.zeros((3, n, n))
-    for j in range(n):
-        a = ends[j]
-        # Start of link j moves: the integrand leaves, and the reference point moves.
-        dmu[:, j, j] = [-rho_a[j], -mu[0, j], -rho_a[j] * t2[j] - 2.0 * mu[1, j]]
-        if j + 1 < n:
-            b = ends[j + 1]
-            dmu[:, j, j + 1] = rho_a[j + 1] * np.array([1.0, b - a, (b - a) ** 2 + t2[j + 1]])
+    idx = np.arange(n)
+    # Start of link j moves: the integrand leaves, and the reference point moves.
+    dmu[0, idx, idx] = -rho_a[:n]
+    dmu[1, idx, idx] = -mu[0]
+    dmu[2, idx, idx] = -rho_a[:n] * t2[:n] - 2.0 * mu[1]
+    # End of link j (the start of link j + 1) moves: the integrand joins at arm b - a.
+    arm_end = np.diff(ends)[: n - 1]
+    rho_end = rho_a[1:n]
+    dmu[0, idx[:-1], idx[1:]] = rho_end
+    dmu[1, idx[:-1], idx[1:]] = rho_end * arm_end
+    dmu[2, idx[:-1], idx[1:]] = rho_end * (arm_end**2 + t2[1:n])
     return mu, dmu
 
 
@@ -183,6 +215,38 @@ def pose_mass_matrix(g: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.n
     return s_mat.T @ (c * g) @ s_mat, c
 
 
+class _Indices:
+    """Index arrays and triangular matrices of an n-joint chain (built once per n)."""
+
+    def __init__(self, n: int):
+        idx = np.arange(n)
+        self.idx = idx
+        self.tri = np.tril(np.ones((n, n)))                 # S: q = S theta
+        self.tri_t = np.ascontiguousarray(self.tri.T)
+        self.lower = np.minimum.outer(idx, idx)
+        self.upper = np.maximum.outer(idx, idx)
+        self.cum_gamma = np.tril(np.ones((n, n + 1)))       # s_j = L sum_{i<j} gamma_i
+        dl = np.zeros((n, n))                               # d l_a / d s_i, l_a = s_{a+1} - s_a
+        dl[idx, idx] = -1.0
+        dl[idx[:-1], idx[1:]] = 1.0
+        self.dl = dl
+        self.later = (idx[None, :] > idx[:, None]).astype(float)
+        db = np.zeros((n + 1, n))       # segment-law bounds: interior bound j = (s_j + s_{j+1})/2
+        for j in range(1, n):
+            db[j, j - 1] = db[j, j] = 0.5
+        self.db = db
+
+
+_INDICES: dict[int, _Indices] = {}
+
+
+def _indices(n: int) -> _Indices:
+    found = _INDICES.get(n)
+    if found is None:
+        found = _INDICES.setdefault(n, _Indices(n))
+    return found
+
+
 def reference_stiffness_and_derivative(problem: MappingProblem, s: np.ndarray,
                                        lengths: np.ndarray, links: tuple):
     """Uncorrected stiffness (n,) and its derivative with respect to s, shape (n, n)."""
@@ -190,34 +254,31 @@ def reference_stiffness_and_derivative(problem: MappingProblem, s: np.ndarray,
     n = s.size
     length = planform.length_m
     e = planform.material.youngs_modulus_pa
+    ends = np.concatenate([s, [length]])
     if problem.stiffness_law == "segment":
-        ends = np.concatenate([s, [length]])
         bounds = np.concatenate([[0.0], 0.5 * (ends[:-1] + ends[1:])[: n - 1], [length]])
         k = 1.0 / compliance_between(planform, bounds)
         inv_ei = 1.0 / (e * planform.area_moment_m4(bounds))
-        # Interior bound j = 1..n-1 is (s_j + s_{j+1}) / 2; the root and the tip are fixed.
-        db = np.zeros((n + 1, n))
-        for j in range(1, n):
-            db[j, j - 1] = db[j, j] = 0.5
+        db = _indices(n).db
+        # The root and the tip bounds are fixed.
         dcomp = inv_ei[1:, None] * db[1:] - inv_ei[:-1, None] * db[:-1]
         return k, -(k**2)[:, None] * dcomp
-    ends = np.concatenate([s, [length]])
     ell = np.diff(ends)
     mass, mean_i = links[0], links[5]
     k = np.sqrt(e * mean_i / mass)
     i_end = planform.area_moment_m4(ends)
     rho_a = planform.material.density_kg_m3 * planform.area_m2(ends)
+    # Link j spans ends[j] .. ends[j + 1] (ends[n] = L fixed); moving an end by +1 changes
+    # the link's integral of I by -/+ I(end), its length by -/+ 1 and its mass by -/+ rho A.
+    half = 0.5 * k
+
+    def rate(side: np.ndarray) -> np.ndarray:
+        return half * ((i_end[side] - mean_i) / (ell * mean_i) - rho_a[side] / mass)
+
+    idx = np.arange(n)
     dk = np.zeros((n, n))
-    for j in range(n):
-        # link j spans ends[j] .. ends[j + 1]; ends[n] = L is fixed.
-        for side, sign in ((j, -1.0), (j + 1, 1.0)):
-            if side >= n:
-                continue
-            d_int = sign * i_end[side]
-            d_ell = sign
-            d_mass = sign * rho_a[side]
-            d_mean = (d_int - mean_i[j] * d_ell) / ell[j]
-            dk[j, side] += 0.5 * k[j] * (d_mean / mean_i[j] - d_mass / mass[j])
+    dk[idx, idx] = -rate(idx)
+    dk[idx[:-1], idx[1:]] = rate(idx + 1)[:-1]
     return k, dk
 
 
@@ -250,25 +311,57 @@ def evaluate_with_jacobian(problem: MappingProblem, x: np.ndarray, workspace: Ch
     Returns:
         Losses and the Jacobian, shape (len(residuals), n_params).
     """
+    out = _evaluate(problem, x, workspace, warm, deflection, load_steps, bool(want_jacobian),
+                    pinocchio, summary=True)
+    assert isinstance(out, JacobianEvaluation)
+    return out
+
+
+def residuals_and_jacobian(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
+                           warm: WarmStarts | None = None, deflection: bool = True,
+                           load_steps: int = 4) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
+    """The residuals of :func:`evaluate_with_jacobian` and a function giving their Jacobian.
+
+    The inner loop of a fit: the closed-form mass matrix, no Pinocchio update, no loss
+    summaries (the same numbers to round-off as :func:`evaluate_with_jacobian`). The
+    Jacobian is formed only when the returned function is called (a trust-region solver
+    needs it at accepted steps only), from the state of this evaluation.
+    """
+    out = _evaluate(problem, x, workspace, warm, deflection, load_steps, None, False,
+                    summary=False)
+    assert isinstance(out, tuple)
+    return out
+
+
+def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
+              warm: WarmStarts | None, deflection: bool, load_steps: int,
+              want_jacobian: bool | None, pinocchio: bool, summary: bool
+              ) -> JacobianEvaluation | tuple[np.ndarray, Callable[[], np.ndarray]]:
+    """Residuals, and the losses when ``summary``.
+
+    The Jacobian is formed now (``want_jacobian`` True), never (False) or on demand (None: a
+    closure over this evaluation's state is returned with the residuals).
+    """
     n = problem.n_joints
     n1 = n + 1
-    raw = np.asarray(x[:n1], dtype=float)
+    ix = _indices(n)
+    x = np.array(x, dtype=float)
+    raw = x[:n1]
     total = raw.sum()
     gamma = raw / total
-    factors = np.exp(np.asarray(x[n1:], dtype=float))
+    factors = np.exp(x[n1:])
     length = problem.planform.length_m
     s, lengths, links = workspace.update(gamma, pinocchio)
     k_ref, dk_ref = reference_stiffness_and_derivative(problem, s, lengths, links)
-    # ds/dx: s_j = L sum_{i<j} gamma_i; gamma = raw / sum(raw).
-    dgamma = (np.eye(n1) - gamma[:, None]) / total
-    ds_dx = length * np.tril(np.ones((n, n1)), 0) @ dgamma
     n_p = problem.n_params
-    m_poses = problem.poses.shape[0]
+    poses = problem.poses
+    m_poses = poses.shape[0]
     law_segment = problem.stiffness_law == "segment"
-    if want_jacobian or not pinocchio:
+    q = np.cumsum(poses, axis=1)
+    cos = np.cos(q[:, :, None] - q[:, None, :])
+    if want_jacobian is not False or not pinocchio:
         mu, dmu = link_moments(problem.planform, s, links)
         g, dg = mass_structure(lengths[1:], mu, dmu)
-        dg_dx = dg @ ds_dx                                  # (n, n, n + 1): fractions only
     nm = problem.n_modes
     if law_segment:
         k_pose = np.broadcast_to(factors * k_ref, (m_poses, n))
@@ -277,11 +370,9 @@ def evaluate_with_jacobian(problem: MappingProblem, x: np.ndarray, workspace: Ch
     # K phi = lam M phi with K diagonal: y = K^(1/2) phi solves A y = (1/lam) y,
     # A = K^(-1/2) M K^(-1/2); phi = K^(-1/2) y / sqrt(1/lam) is M-normalised.
     if pinocchio:
-        mass = np.array([workspace.mass_matrix(pose) for pose in problem.poses])
+        mass = np.array([workspace.mass_matrix(pose) for pose in poses])
     else:
-        q_all = np.cumsum(problem.poses, axis=1)
-        tri = np.tril(np.ones((n, n)))
-        mass = tri.T @ (np.cos(q_all[:, :, None] - q_all[:, None, :]) * g) @ tri
+        mass = ix.tri_t @ (cos * g) @ ix.tri
     k_isqrt = 1.0 / np.sqrt(k_pose)
     a_mat = mass * k_isqrt[:, :, None] * k_isqrt[:, None, :]
     mu_all, y_all = np.linalg.eigh(a_mat)
@@ -289,92 +380,116 @@ def evaluate_with_jacobian(problem: MappingProblem, x: np.ndarray, workspace: Ch
     lam = 1.0 / mu_top                                    # ascending eigenvalues (m, nm)
     phi = k_isqrt[:, :, None] * y_all[:, :, ::-1][:, :, :nm] / np.sqrt(mu_top)[:, None, :]
     model_hz = np.sqrt(lam) / (2.0 * np.pi)
-    dfreq = np.zeros((m_poses, nm, n_p))
-    if want_jacobian:
-        q = np.cumsum(problem.poses, axis=1)
-        cos = np.cos(q[:, :, None] - q[:, None, :])
-        psi = np.einsum("ab,mbk->mak", np.tril(np.ones((n, n))), phi)
-        # dM/dx_p = S^T (C o dG/dx_p) S, contracted with phi on both sides.
-        weights = np.einsum("mak,mbk,mab->mkab", psi, psi, cos).reshape(m_poses, nm, n * n)
-        dm_quad = weights @ dg_dx.reshape(n * n, n1)          # (m, nm, n1)
-        dk_frac = dk_ref @ ds_dx                              # (n, n1) per unit factor
-        f_pose = k_pose / k_ref                               # correction factor per (pose, j)
-        phi2 = phi**2                                         # (m, n, nm)
-        dfreq[:, :, :n1] = np.einsum("mjk,mj,jp->mkp", phi2, f_pose, dk_frac) \
-            - lam[:, :, None] * dm_quad
-        if law_segment:
-            dfreq[:, :, n1:] = np.swapaxes(phi2 * k_pose[:, :, None], 1, 2)
-        else:
-            dfreq[np.arange(m_poses), :, n1 + np.arange(m_poses)] = np.einsum(
-                "mjk,mj->mk", phi2, k_pose)
-        dfreq /= 8.0 * np.pi**2 * model_hz[:, :, None]
-    rel = model_hz / problem.truth_hz - 1.0
-    pose_err = np.sqrt(np.mean(rel**2, axis=1))
-    eig = float(np.sqrt(np.mean(rel**2)))
-    eq16 = np.linalg.norm(model_hz - problem.truth_hz, axis=1) / np.linalg.norm(problem.truth_hz)
+    truth_hz = problem.truth_hz
     paper = problem.metrics == "paper"
     if paper:
-        norm_f = np.linalg.norm(problem.truth_hz)
-        eig_res = ((model_hz - problem.truth_hz) / norm_f).ravel() / np.sqrt(m_poses)
-        jac_eig = (dfreq / norm_f).reshape(-1, n_p) / np.sqrt(m_poses)
+        norm_f = np.sqrt(np.sum(truth_hz**2))
+        eig_res = ((model_hz - truth_hz) / norm_f).ravel() / np.sqrt(m_poses)
+        eig_scale = np.full(nm, norm_f * np.sqrt(m_poses))
     else:
+        rel = model_hz / truth_hz - 1.0
         eig_res = rel.ravel() / np.sqrt(rel.size)
-        jac_eig = (dfreq / problem.truth_hz[None, :, None]).reshape(-1, n_p) / np.sqrt(rel.size)
-    n_loads = problem.forces_n.shape[0]
+        eig_scale = truth_hz * np.sqrt(rel.size)
+    forces = problem.forces_n
+    n_loads = forces.shape[0]
+    truth_tips = problem.truth_tips_m
     tips = np.full((n_loads, 2), np.nan)
-    load_err = np.full(n_loads, np.nan)
-    pos_err = np.full(n_loads, np.nan)
     defl_res = np.zeros((n_loads, 2))
-    jac_defl = np.zeros((n_loads, 2, n_p))
-    failed = 0
-    if deflection and n_loads:
-        k_static = factors * k_ref if law_segment else float(np.mean(factors)) * k_ref
+    ok = np.zeros(n_loads, dtype=bool)
+    undeformed = np.array([length, 0.0])
+    solved = deflection and n_loads > 0
+    k_static = factors * k_ref if law_segment else float(np.mean(factors)) * k_ref
+    theta = np.zeros((n_loads, n))
+    scale = np.ones(n_loads)
+    if solved:
         ell = lengths[1:]
         theta0 = np.zeros((n_loads, n))
         have = np.zeros(n_loads, dtype=bool)
         if warm is not None:
-            for index, angles in warm.angles.items():
+            for index in warm.angles:
                 if index < n_loads:
-                    theta0[index], have[index] = angles, True
-        theta = np.zeros((n_loads, n))
-        ok = np.zeros(n_loads, dtype=bool)
-        if np.any(have):
-            theta[have], ok[have] = planar_statics(k_static, ell, problem.forces_n[have],
-                                                   theta0[have], 1)
+                    theta0[index], have[index] = warm.start(index, x), True
+        if have.all():
+            theta, ok = planar_statics(k_static, ell, forces, theta0, 1)
+        elif have.any():
+            theta[have], ok[have] = planar_statics(k_static, ell, forces[have], theta0[have], 1)
         retry = ~ok
-        if np.any(retry):
-            theta_c, ok_c = planar_statics(k_static, ell, problem.forces_n[retry],
+        if retry.any():
+            theta_c, ok_c = planar_statics(k_static, ell, forces[retry],
                                            np.zeros((int(retry.sum()), n)), load_steps)
             theta[retry], ok[retry] = theta_c, ok_c
-        undeformed = np.array([length, 0.0])
-        scale = np.linalg.norm(problem.truth_tips_m - (0.0 if paper else undeformed), axis=1)
-        failed = int(np.count_nonzero(~ok))
-        load_err[~ok] = FAILED_LOAD_ERROR
-        pos_err[~ok] = FAILED_LOAD_ERROR
+        offset = truth_tips if paper else truth_tips - undeformed
+        scale = np.sqrt(np.sum(offset**2, axis=1))
         defl_res[~ok] = FAILED_LOAD_ERROR / np.sqrt(2.0)
         if warm is not None:
             for k_load in np.flatnonzero(ok):
                 warm.angles[int(k_load)] = theta[k_load].copy()
-        if np.any(ok):
-            q = np.cumsum(theta[ok], axis=1)
-            tips[ok] = np.column_stack([s[0] + (ell * np.cos(q)).sum(1),
-                                        -(ell * np.sin(q)).sum(1)])
-            miss = tips[ok] - problem.truth_tips_m[ok]
-            load_err[ok] = np.linalg.norm(miss, axis=1) / np.linalg.norm(
-                problem.truth_tips_m[ok] - undeformed, axis=1)
-            pos_err[ok] = np.linalg.norm(miss, axis=1) / np.linalg.norm(
-                problem.truth_tips_m[ok], axis=1)
-            defl_res[ok] = miss / scale[ok, None]
-            if want_jacobian:
-                jac_defl[ok] = _tip_derivative(k_static, theta[ok], problem.forces_n[ok],
-                                               lengths, k_ref, dk_ref, factors, ds_dx,
-                                               law_segment, n1) / scale[ok, None, None]
-    defl = float(np.sqrt(np.mean(load_err**2))) if deflection and n_loads else float("nan")
-    defl_pos = float(np.sqrt(np.mean(pos_err**2))) if deflection and n_loads else float("nan")
-    combined = float(np.hypot(eig, defl)) if deflection and n_loads else float("nan")
+        if ok.any():
+            qs = np.cumsum(theta[ok], axis=1)
+            tips[ok] = np.column_stack([s[0] + (ell * np.cos(qs)).sum(1),
+                                        -(ell * np.sin(qs)).sum(1)])
+            defl_res[ok] = (tips[ok] - truth_tips[ok]) / scale[ok, None]
     norm_l = np.sqrt(max(n_loads, 1))
     residuals = np.concatenate([eig_res, defl_res.ravel() / norm_l])
-    jac = np.vstack([jac_eig, jac_defl.reshape(-1, n_p) / norm_l])
+
+    def jacobian() -> np.ndarray:
+        # ds/dx: s_j = L sum_{i<j} gamma_i; gamma = raw / sum(raw).
+        dgamma = (np.eye(n1) - gamma[:, None]) / total
+        ds_dx = length * (ix.cum_gamma @ dgamma)
+        dfreq = np.zeros((m_poses, nm, n_p))
+        dg_dx = dg @ ds_dx                                  # (n, n, n + 1): fractions only
+        psi = ix.tri @ phi                                  # (m, n, nm)
+        # dM/dx_p = S^T (C o dG/dx_p) S, contracted with phi on both sides.
+        psi_t = psi.transpose(0, 2, 1)
+        weights = (psi_t[:, :, :, None] * psi_t[:, :, None, :]
+                   * cos[:, None, :, :]).reshape(m_poses, nm, n * n)
+        dm_quad = weights @ dg_dx.reshape(n * n, n1)          # (m, nm, n1)
+        dk_frac = dk_ref @ ds_dx                              # (n, n1) per unit factor
+        phi2 = phi**2                                         # (m, n, nm)
+        # d lam / d fractions: phi^T dK phi - lam phi^T dM phi; k_pose / k_ref = factor.
+        f_pose = k_pose / k_ref
+        dfreq[:, :, :n1] = np.swapaxes(phi2 * f_pose[:, :, None], 1, 2) @ dk_frac \
+            - lam[:, :, None] * dm_quad
+        if law_segment:
+            dfreq[:, :, n1:] = np.swapaxes(phi2 * k_pose[:, :, None], 1, 2)
+        else:
+            dfreq[np.arange(m_poses), :, n1 + np.arange(m_poses)] = \
+                (phi2 * k_pose[:, :, None]).sum(1)
+        dfreq /= 8.0 * np.pi**2 * model_hz[:, :, None]
+        jac_eig = (dfreq / eig_scale[None, :, None]).reshape(-1, n_p)
+        jac_defl = np.zeros((n_loads, 2, n_p))
+        if solved and ok.any():
+            dtip, dtheta = _tip_derivative(k_static, theta[ok], forces[ok], lengths, k_ref,
+                                           dk_ref, factors, ds_dx, law_segment, n1)
+            jac_defl[ok] = dtip / scale[ok, None, None]
+            if warm is not None:
+                warm.set_base(x, {int(k): theta[k] for k in np.flatnonzero(ok)},
+                              {int(k): dtheta[row] for row, k in enumerate(np.flatnonzero(ok))})
+        return np.vstack([jac_eig, jac_defl.reshape(-1, n_p) / norm_l])
+
+    if not summary:
+        assert want_jacobian is None
+        return residuals, jacobian
+    jac = jacobian() if want_jacobian else np.zeros((residuals.size, n_p))
+    rel = model_hz / truth_hz - 1.0
+    pose_err = np.sqrt(np.mean(rel**2, axis=1))
+    eig = float(np.sqrt(np.mean(rel**2)))
+    eq16 = np.linalg.norm(model_hz - truth_hz, axis=1) / np.linalg.norm(truth_hz)
+    load_err = np.full(n_loads, np.nan)
+    pos_err = np.full(n_loads, np.nan)
+    failed = 0
+    if solved:
+        failed = int(np.count_nonzero(~ok))
+        load_err[~ok] = FAILED_LOAD_ERROR
+        pos_err[~ok] = FAILED_LOAD_ERROR
+        if ok.any():
+            miss = tips[ok] - truth_tips[ok]
+            load_err[ok] = np.linalg.norm(miss, axis=1) / np.linalg.norm(
+                truth_tips[ok] - undeformed, axis=1)
+            pos_err[ok] = np.linalg.norm(miss, axis=1) / np.linalg.norm(truth_tips[ok], axis=1)
+    defl = float(np.sqrt(np.mean(load_err**2))) if solved else float("nan")
+    defl_pos = float(np.sqrt(np.mean(pos_err**2))) if solved else float("nan")
+    combined = float(np.hypot(eig, defl)) if solved else float("nan")
     ev = Evaluation(eig, defl, defl_pos, combined, pose_err, load_err, model_hz, tips, failed,
                     residuals, float(np.sqrt(np.mean(eq16**2))), eq16, pos_err)
     return JacobianEvaluation(ev, jac)
@@ -383,8 +498,11 @@ def evaluate_with_jacobian(problem: MappingProblem, x: np.ndarray, workspace: Ch
 def _tip_derivative(k_static: np.ndarray, theta: np.ndarray, forces: np.ndarray,
                     lengths: np.ndarray, k_ref: np.ndarray, dk_ref: np.ndarray,
                     factors: np.ndarray, ds_dx: np.ndarray, law_segment: bool,
-                    n1: int) -> np.ndarray:
-    """Derivatives of the tips (x, z) with respect to x at equilibria, shape (l, 2, n_params).
+                    n1: int) -> tuple[np.ndarray, np.ndarray]:
+    """Derivatives of the tips (x, z) and of the angles with respect to x at equilibria.
+
+    Returns:
+        (d tip / d x of shape (l, 2, n_params), d theta / d x of shape (l, n, n_params)).
 
     Args:
         k_static: Static spring stiffness (n,).
@@ -399,25 +517,23 @@ def _tip_derivative(k_static: np.ndarray, theta: np.ndarray, forces: np.ndarray,
         n1: n + 1.
     """
     n_l, n = theta.shape
+    ix = _indices(n)
     n_p = ds_dx.shape[1] + factors.size
     q = np.cumsum(theta, axis=1)
     ell = lengths[1:]
     c, sn = np.cos(q), np.sin(q)
     fx, fz = forces[:, :1], forces[:, 1:]
-    s_mat = np.tril(np.ones((n, n)))
+    s_mat = ix.tri
     # Tip Jacobian rows: d x_tip / d q_a = -l_a sin q_a, d z_tip / d q_a = -l_a cos q_a.
     jac_x = (-ell * sn) @ s_mat
     jac_z = (-ell * c) @ s_mat
     work = -sn * fx - c * fz                               # u'(q_a) . F
-    idx = np.arange(n)
+    idx = ix.idx
     arm = ell * (c * fx - sn * fz)                         # l_a u(q_a) . F
     suffix = np.cumsum(arm[:, ::-1], axis=1)[:, ::-1]
-    tangent = suffix[:, np.maximum.outer(idx, idx)]
+    tangent = suffix[:, ix.upper]
     tangent[:, idx, idx] += k_static
-    dl_ds = np.zeros((n, n))                               # links 1..n: l_a = s_{a+1} - s_a
-    dl_ds[idx, idx] = -1.0
-    dl_ds[idx[:-1], idx[1:]] = 1.0
-    dl_dx = dl_ds @ ds_dx                                  # (n, n1)
+    dl_dx = ix.dl @ ds_dx                                  # (n, n1)
     scale = factors if law_segment else np.full(n, float(np.mean(factors)))
     dk_dx = np.zeros((n, n_p))
     dk_dx[:, :n1] = scale[:, None] * dk_ref @ ds_dx
@@ -427,14 +543,26 @@ def _tip_derivative(k_static: np.ndarray, theta: np.ndarray, forces: np.ndarray,
         dk_dx[:, n1:] = k_ref[:, None] * (factors / factors.size)[None, :]
     dr = dk_dx[None, :, :] * theta[:, :, None]
     # (J^T F)_i = sum_{a >= i} l_a u'(q_a) . F depends on the lengths directly.
-    dr[:, :, :n1] -= np.einsum("ia,la,ap->lip", s_mat.T, work, dl_dx)
+    dr[:, :, :n1] -= s_mat.T @ (work[:, :, None] * dl_dx[None, :, :])
     dtheta = -np.linalg.solve(tangent, dr)
-    dtip = np.stack([np.einsum("la,lap->lp", jac_x, dtheta),
-                     np.einsum("la,lap->lp", jac_z, dtheta)], axis=1)
+    dtip = np.stack([(jac_x[:, None, :] @ dtheta)[:, 0], (jac_z[:, None, :] @ dtheta)[:, 0]],
+                    axis=1)
     # Direct dependence on the geometry: P = (s_1, 0) + sum_a l_a u(q_a).
     dtip[:, 0, :n1] += c @ dl_dx + ds_dx[0]
     dtip[:, 1, :n1] += -sn @ dl_dx
-    return dtip
+    return dtip, dtheta
+
+
+_TOP_CACHE: dict[int, np.ndarray] = {}
+
+
+def _top_index(n: int) -> np.ndarray:
+    """max(i, j) for an n x n grid (cached)."""
+    top = _TOP_CACHE.get(n)
+    if top is None:
+        idx = np.arange(n)
+        top = _TOP_CACHE.setdefault(n, np.maximum.outer(idx, idx))
+    return top
 
 
 def planar_tip(root_m: float, ell: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -466,47 +594,49 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
     """
     theta = np.array(theta0, dtype=float)
     n_l, n = theta.shape
-    idx = np.arange(n)
-    top = np.maximum.outer(idx, idx)
+    top = _top_index(n)
     ok = np.ones(n_l, dtype=bool)
+    diag = np.arange(n)
+    fx_all, fz_all = forces[:, :1], forces[:, 1:]
+    tangent = np.empty((n_l, n, n))
 
-    def terms(th: np.ndarray, f: np.ndarray):
-        q = np.cumsum(th, axis=1)
-        c, sn = np.cos(q), np.sin(q)
-        w = ell * (-sn * f[:, :1] - c * f[:, 1:])             # l_a u'(q_a) . F
-        tau = np.cumsum(w[:, ::-1], axis=1)[:, ::-1]
-        arm = ell * (c * f[:, :1] - sn * f[:, 1:])            # l_a u(q_a) . F
-        suffix = np.cumsum(arm[:, ::-1], axis=1)[:, ::-1]
-        tangent = suffix[:, top]
-        tangent[:, idx, idx] += k
-        return k * th - tau, tangent, tau
-
-    for step in range(1, int(load_steps) + 1):
-        f_step = forces * step / load_steps
+    steps = max(1, int(load_steps))
+    for step in range(1, steps + 1):
+        frac = step / steps
+        fx, fz = fx_all * frac, fz_all * frac
         active = ok.copy()
         for iteration in range(max_iter + 1):
-            residual, tangent, tau = terms(theta, f_step)
-            norm = np.sqrt(np.einsum("li,li->l", residual, residual))
+            q = np.cumsum(theta, axis=1)
+            c, sn = np.cos(q), np.sin(q)
+            # tau_i = sum_{a >= i} l_a u'(q_a) . F; the tangent's (i, j) entry is the suffix
+            # sum from max(i, j) of l_a u(q_a) . F, plus k on the diagonal.
+            tau = np.cumsum((ell * (-sn * fx - c * fz))[:, ::-1], axis=1)[:, ::-1]
+            suffix = np.cumsum((ell * (c * fx - sn * fz))[:, ::-1], axis=1)[:, ::-1]
+            tangent = suffix[:, top]
+            tangent[:, diag, diag] += k
             kt = k * theta
-            scale = np.sqrt(np.einsum("li,li->l", kt, kt)) \
-                + np.sqrt(np.einsum("li,li->l", tau, tau)) + 1e-300
-            done = norm <= tol * scale
-            bad = ~np.isfinite(norm)
-            ok &= ~bad
-            active &= ~done & ~bad
-            if not np.any(active):
+            residual = kt - tau
+            norm = np.sqrt((residual * residual).sum(1))
+            scale = np.sqrt((kt * kt).sum(1)) + np.sqrt((tau * tau).sum(1)) + 1e-300
+            finite = np.isfinite(norm)
+            ok &= finite
+            active &= (norm > tol * scale) & finite
+            if not active.any():
                 break
             if iteration == max_iter:
                 ok &= ~active
                 break
             try:
-                delta = np.linalg.solve(tangent[active], residual[active][:, :, None])[:, :, 0]
+                if active.all():
+                    theta -= np.linalg.solve(tangent, residual[:, :, None])[:, :, 0]
+                else:
+                    theta[active] -= np.linalg.solve(tangent[active],
+                                                     residual[active][:, :, None])[:, :, 0]
             except np.linalg.LinAlgError:
                 ok &= ~active
                 break
-            theta[active] -= delta
-    _, tangent, _ = terms(theta, forces)
-    eig_min = np.linalg.eigvalsh(0.5 * (tangent + np.swapaxes(tangent, 1, 2)))[:, 0]
+    # The last tangent was formed at the final angles and the full load (symmetric).
+    eig_min = np.linalg.eigvalsh(tangent)[:, 0]
     ok &= eig_min > 0.0
     angle = np.arctan2(-forces[:, 1], forces[:, 0])
     absolute = np.cumsum(theta, axis=1)

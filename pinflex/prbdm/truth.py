@@ -22,6 +22,7 @@ whose two extrapolants must agree (a built-in convergence check, :func:`beam_fre
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -328,17 +329,32 @@ def _integrate_elastica(planform: Planform, force: np.ndarray, tip_rotation: flo
     Returns:
         The root state (x, z, phi, M, h, mu) and (min phi, max phi, min h) over the beam.
     """
-    fx, fz = force
+    fx, fz = float(force[0]), float(force[1])
     e = planform.material.youngs_modulus_pa
+    x_v = planform.x_m
+    # EI is linear in s between vertices when the thickness is uniform: EI = ei_b + k (s - b).
+    ei_v = e * planform.area_moment_m4(x_v)
+    linear = planform.thickness_profile_m is None
+    cos, sin = math.cos, math.sin
 
-    def rhs(s, y):
+    def piece_rhs(b: float, ei_b: float, k: float):
+        def rhs(s, y):
+            c, sn = cos(y[2]), sin(y[2])
+            ei = ei_b + k * (s - b)
+            return [c, -sn, y[3] / ei, sn * fx + c * fz, y[5] / ei, (c * fx - sn * fz) * y[4]]
+        return rhs
+
+    def rhs_general(s, y):
         c, sn = np.cos(y[2]), np.sin(y[2])
         ei = e * planform.area_moment_m4(s)
         return [c, -sn, y[3] / ei, sn * fx + c * fz, y[5] / ei, (c * fx - sn * fz) * y[4]]
 
     state = np.array([0.0, 0.0, tip_rotation, 0.0, 1.0, 0.0])
     low, high, h_min = tip_rotation, tip_rotation, 1.0
-    for a, b in zip(planform.x_m[:0:-1], planform.x_m[-2::-1]):
+    for j in range(x_v.size - 1, 0, -1):
+        a, b = float(x_v[j]), float(x_v[j - 1])
+        rhs = piece_rhs(b, float(ei_v[j - 1]), float((ei_v[j] - ei_v[j - 1]) / (a - b))) \
+            if linear else rhs_general
         sol = solve_ivp(rhs, (a, b), state, method="DOP853", rtol=rtol, atol=rtol * 1e-3)
         if not sol.success:
             raise TruthNotConverged(f"elastica integration failed on [{b:g}, {a:g}] m: "
@@ -357,10 +373,10 @@ def _elastica_newton(planform: Planform, force: np.ndarray, phi_tip: float, rtol
         if not np.all(np.isfinite(state)) or state[4] <= 0.0:
             return None
         step = state[2] / state[4]
-        phi_tip = phi_tip - step
         if abs(step) <= 1e-12:
-            state, extremes = _integrate_elastica(planform, force, phi_tip, rtol)
+            # Converged: the state belongs to this tip rotation (clamp residual <= 1e-12 h).
             return phi_tip, state, extremes
+        phi_tip = phi_tip - step
     return None
 
 
