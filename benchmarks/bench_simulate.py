@@ -1,135 +1,141 @@
-"""Time simulation of benchmark A's pick-and-place: cost, accuracy, modal truncation.
+"""Time simulation of benchmark A's pick-and-place: cost per simulated second and accuracy.
 
-Run: ``python benchmarks/bench_simulate.py [--quick] [--json] [--out DIR]``.
+Run: ``python benchmarks/bench_simulate.py [--quick] [--json] [--rounds N] [--peer]``.
 
-Measures, in one process (BLAS threads as set in the environment; use
-``OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1``):
+Measures, in one process (single-thread BLAS unless the environment sets it), on benchmark A
+(baseline design, 1.51 s of motion and ``--after`` s held):
 
-* the prescribed-motion simulation of benchmark A (baseline design, 1.51 s of motion and
-  ``--after`` s held) at the default tolerances: compute time, steps, cost per simulated second
-  (SPEC §7 target: one second of motion in under one second of compute), median and range over
-  ``--rounds`` rounds;
-* its error against a tight reference (``rtol = 1e-6``, 4 exact coefficient evaluations per
-  sample interval): max |δ_tip − δ_ref| / max |δ_ref|;
-* the reduced simulation on the k lowest locked-joint modes of 3 poses along the motion
-  (start, middle, end; up to 3k basis vectors), k = 1 .. nx/3: error against the full
-  simulation at the same tolerances and speed-up, charted with ``--out``.
+* the prescribed-motion simulation with the default integrator (``"fixed"``: trapezoidal rule
+  at two uniform step sizes, Richardson extrapolation) and with the adaptive generalized-α
+  (``"newmark"``, the previous default), timed round by round interleaved: CPU time of the
+  process (``time.process_time``; the machine may be shared) and wall time, median and range
+  over ``--rounds`` rounds, per simulated second (target: under 1 s of compute per second);
+  the report (tip deflection and metrics) is timed with it;
+* the error of each against a converged run (``"fixed"`` with ``tol`` 1e-4, 8 coefficient
+  evaluations per sample interval; ``--quick``: ``tol`` 1e-3): max |δ − δ_ref| / max |δ_ref| of
+  the tip deflection, and the Richardson estimate the default run reports;
+* with ``--peer`` (needs the ``peers`` extra, Exudyn): the same motion in Exudyn
+  (``benchmarks/peer_exudyn.py``), its cost per simulated second and its tip deflection against
+  ours, in the same run.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-
-
-def _basis_size(dyn, traj, k: int) -> int:
-    from pinflex.dynamics.motion import JointMotion
-    from pinflex.dynamics.simulate import PrescribedSystem, _ReducedSystem
-
-    return _ReducedSystem(PrescribedSystem(dyn, JointMotion(traj)), k).nx
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 
 def main(argv=None) -> int:
     """Run the benchmark."""
+    from interleave import blas_threads, pin_single_thread
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true", help="0.1 s after the stop, k in {1, 2, 4}")
+    ap.add_argument("--quick", action="store_true", help="0.1 s after the stop, 3 rounds, "
+                    "looser reference")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
-    ap.add_argument("--out", default=None, help="folder for the truncation chart")
     ap.add_argument("--after", type=float, default=None, help="held time after the stop [s]")
-    ap.add_argument("--rounds", type=int, default=None, help="timing rounds (default 5, 1 quick)")
+    ap.add_argument("--rounds", type=int, default=None, help="timing rounds (default 5, 3 quick)")
+    ap.add_argument("--peer", action="store_true", help="also run the Exudyn model")
     args = ap.parse_args(argv)
+    if "numpy" not in sys.modules:
+        pin_single_thread()
+    import numpy as np
 
     from pinflex.assignment.study import user_trajectory
     from pinflex.dynamics import ErlsDynamics, simulate_prescribed, vibration_report
     from pinflex.erls import FlexibleModel
 
     after = args.after if args.after is not None else (0.1 if args.quick else 0.5)
-    rounds = args.rounds or (1 if args.quick else 5)
+    rounds = args.rounds or (3 if args.quick else 5)
     model = FlexibleModel(ROOT / "urdf" / "two_link.urdf", planar=True)
     traj = user_trajectory(model, "benchmark_a")
     dyn = ErlsDynamics(model, y=np.zeros(model.ny))
     simulated = traj.duration_s + after
 
     def run(**kw):
-        t0 = time.perf_counter()
+        c0, w0 = time.process_time(), time.perf_counter()
         sim = simulate_prescribed(dyn, traj, after_s=after, **kw)
         rep = vibration_report(dyn, sim)
-        return sim, rep, time.perf_counter() - t0
+        return sim, rep, time.process_time() - c0, time.perf_counter() - w0
 
-    ref_sim, ref, t_ref = run(rtol=1e-6, grid_per_interval=4)
-    times, reps = [], []
-    for _ in range(rounds):
-        sim, rep, _ = run()
-        times.append(sim.time_s)
-        reps.append((sim, rep))
-    sim, rep = reps[-1]
-    scale = np.abs(ref.deflection_m).max()
-    err_default = float(np.abs(rep.deflection_m - ref.deflection_m).max() / scale)
-    ks = [1, 2, 4] if args.quick else list(range(1, model.nx // 3 + 1))
-    trunc = []
-    for k in ks:
-        s_k, r_k, _ = run(modes=k)
-        trunc.append({"k": k, "basis": _basis_size(dyn, traj, k),
-                      "error": float(np.abs(r_k.deflection_m - rep.deflection_m).max()
-                                              / np.abs(rep.deflection_m).max()),
-                      "time_s": s_k.time_s, "speedup": float(np.median(times)) / s_k.time_s,
-                      "steps": s_k.steps})
-    out = {
-        "blas_threads": {k: __import__("os").environ.get(k) for k in
-                         ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")},
+    ref_sim, ref, _, _ = run(tol=1e-3 if args.quick else 1e-4, grid_per_interval=8)
+    scale = float(np.abs(ref.deflection_m).max())
+    sides = {"fixed": {}, "newmark": {"method": "newmark"}}
+    cpu: dict = {k: [] for k in sides}
+    wall: dict = {k: [] for k in sides}
+    last: dict = {}
+    for r in range(rounds):
+        for name in (list(sides) if r % 2 == 0 else list(sides)[::-1]):
+            sim, rep, c, w = run(**sides[name])
+            cpu[name].append(c / simulated)
+            wall[name].append(w / simulated)
+            last[name] = (sim, rep)
+    out: dict = {
+        "blas_threads": blas_threads(), "load_average": list(os.getloadavg()),
         "simulated_s": simulated, "motion_s": traj.duration_s, "after_s": after,
-        "time_s_median": float(np.median(times)), "time_s_range": [min(times), max(times)],
-        "cost_per_simulated_s": float(np.median(times)) / simulated,
-        "steps": sim.steps, "error_default_vs_tight": err_default,
-        "reference": {"time_s": ref_sim.time_s, "steps": ref_sim.steps},
-        "tip_peak_m": rep.tip_peak_m, "residual_amplitude_m": rep.residual_amplitude_m,
-        "dominant_frequency_hz": rep.dominant_frequency_hz,
-        "locked_mode1_hz": rep.reference_hz[0], "truncation": trunc,
-        "peer": "not measured (see the module doc)",
+        "rounds": rounds,
+        "reference": {"tol": ref_sim.error_estimate, "steps": ref_sim.steps},
     }
-    if args.out:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
+    for name in sides:
+        sim, rep = last[name]
+        out[name] = {
+            "cpu_per_simulated_s_median": float(np.median(cpu[name])),
+            "cpu_per_simulated_s_range": [float(min(cpu[name])), float(max(cpu[name]))],
+            "wall_per_simulated_s_median": float(np.median(wall[name])),
+            "wall_per_simulated_s_range": [float(min(wall[name])), float(max(wall[name]))],
+            "steps": sim.steps,
+            "tip_error_vs_converged": float(np.abs(rep.deflection_m - ref.deflection_m).max()
+                                            / scale),
+            "error_estimate": (None if not np.isfinite(sim.error_estimate)
+                               else sim.error_estimate),
+        }
+    ratio = np.array(cpu["newmark"]) / np.array(cpu["fixed"])
+    out["speedup_cpu_vs_newmark"] = {"median": float(np.median(ratio)),
+                                     "range": [float(ratio.min()), float(ratio.max())]}
+    sim, rep = last["fixed"]
+    out["tip_peak_m"] = rep.tip_peak_m
+    out["residual_amplitude_m"] = rep.residual_amplitude_m
+    out["dominant_frequency_hz"] = rep.dominant_frequency_hz
+    out["locked_mode1_hz"] = rep.reference_hz[0]
+    out["peer"] = None
+    if args.peer:
+        from peer_exudyn import compare_with_exudyn
 
-        fig = Figure(figsize=(6.5, 4.0), layout="constrained")
-        FigureCanvasAgg(fig)
-        ax = fig.subplots()
-        kk = [t["k"] for t in trunc]
-        ax.semilogy(kk, [max(t["error"], 1e-16) for t in trunc], "o-", label="error vs full")
-        ax.set_xlabel("locked-joint modes kept per pose, k (3 poses)")
-        ax.set_ylabel("max |δ_k − δ_full| / max |δ_full|")
-        ax2 = ax.twinx()
-        ax2.plot(kk, [t["speedup"] for t in trunc], "s--", color="C1", label="speed-up")
-        ax2.set_ylabel("speed-up (full time / reduced time)")
-        ax.grid(alpha=0.3, which="both")
-        ax.set_title("benchmark A, tip deflection: modal truncation", fontsize=9)
-        Path(args.out).mkdir(parents=True, exist_ok=True)
-        p = Path(args.out) / "simulate_truncation.png"
-        fig.savefig(p, dpi=120)
-        out["chart"] = str(p)
+        out["peer"] = compare_with_exudyn(model, traj, rep, after_s=after, quick=args.quick)
     if args.json:
         print(json.dumps(out))
         return 0
-    print(f"benchmark A prescribed motion: {simulated:.2f} s simulated in "
-          f"{out['time_s_median']:.3f} s (median of {rounds}; range "
-          f"{min(times):.3f}-{max(times):.3f} s) = {out['cost_per_simulated_s']:.3f} s of "
-          f"compute per simulated second ({sim.steps} steps); target < 1")
-    print(f"  error at default tolerances vs rtol 1e-6: {100 * err_default:.3f} % of the peak")
+    print(f"benchmark A prescribed motion, {simulated:.2f} s simulated; {out['blas_threads']}; "
+          f"load average {out['load_average'][0]:.1f} on {os.cpu_count()} cores; "
+          f"{rounds} interleaved rounds")
+    for name in sides:
+        d = out[name]
+        est = d["error_estimate"]
+        print(f"  {name:8s}: {d['cpu_per_simulated_s_median']:.3f} s CPU per simulated s "
+              f"(range {d['cpu_per_simulated_s_range'][0]:.3f}-"
+              f"{d['cpu_per_simulated_s_range'][1]:.3f}), wall "
+              f"{d['wall_per_simulated_s_median']:.3f} ({d['wall_per_simulated_s_range'][0]:.3f}-"
+              f"{d['wall_per_simulated_s_range'][1]:.3f}); {d['steps']} steps; tip error vs "
+              f"converged {100 * d['tip_error_vs_converged']:.3f} % of the peak"
+              + ("" if est is None else f" (Richardson estimate {100 * est:.2f} %)"))
+    s = out["speedup_cpu_vs_newmark"]
+    print(f"  fixed vs newmark: {s['median']:.1f}x less CPU ({s['range'][0]:.1f}-"
+          f"{s['range'][1]:.1f}); target < 1 s CPU per simulated s")
     print(f"  tip peak {1e3 * rep.tip_peak_m:.4f} mm, residual {1e3 * rep.residual_amplitude_m:.4f}"
           f" mm at {rep.dominant_frequency_hz:.3f} Hz (locked mode 1 {rep.reference_hz[0]:.3f} Hz)")
-    for t in trunc:
-        print(f"  k = {t['k']:2d} ({t['basis']:2d} vectors): error {100 * t['error']:8.4f} %, "
-              f"{t['time_s']:.3f} s, speed-up {t['speedup']:.2f}")
-    if "chart" in out:
-        print(f"wrote {out['chart']}")
+    if out["peer"] is not None:
+        p = out["peer"]
+        print(f"  peer ({p['peer']}): {p['cpu_per_simulated_s']:.3f} s CPU per simulated s; "
+              f"tip deflection difference {100 * p['tip_difference']:.2f} % of our peak; "
+              f"{p['model']}")
     return 0
 
 

@@ -23,18 +23,23 @@ def add_parser(sub) -> None:
     p.add_argument("--exaggeration", type=float, default=200.0,
                    help="with --out: factor on the elastic motion in the meshcat playback pages "
                    "(0: no playback; default 200)")
+    p.add_argument("--tol", type=float, default=None, metavar="TOL",
+                   help="prescribed drive: halve the time step until the Richardson estimate of "
+                   "its error (relative to the largest elastic coordinate) is at most TOL; "
+                   "overrides the study's [simulation] tol")
     add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_simulate)
 
 
-def run_study(path, joints: str | None = None,
-              values: dict[str, float] | None = None) -> tuple[list, list, Any, Any]:
+def run_study(path, joints: str | None = None, values: dict[str, float] | None = None,
+              tol: float | None = None) -> tuple[list, list, Any, Any]:
     """Assign the study's design, then simulate the baseline and the assigned design.
 
     Args:
         path: Study TOML with a ``[simulation]`` table.
         joints: Joint conditions overriding the study's ``joints`` key (``--joints``).
         values: Parameter values overriding and adding to the study's ``values`` (``--set``).
+        tol: Step-error tolerance overriding the study's ``tol`` (``--tol``).
 
     Returns:
         ``(reports, [(simulation, dynamics)], settings, assignment result)``.
@@ -43,6 +48,13 @@ def run_study(path, joints: str | None = None,
     from pinflex.dynamics.study import load_simulation_study, simulate_design
 
     cfg, settings = load_simulation_study(path)
+    if tol is not None:
+        import dataclasses
+
+        from pinflex.dynamics.study import parse_simulation_table
+
+        parse_simulation_table({"tol": tol})  # the same checks as in the file
+        settings = dataclasses.replace(settings, tol=float(tol))
     if joints is not None:
         cfg.joints = joints
     if values:
@@ -61,7 +73,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     """Run ``pinflex simulate``."""
     t0 = time.perf_counter()
     reports, sims, settings, result = run_study(
-        args.config, args.joints, parse_values(args.set) if args.set else None)
+        args.config, args.joints, parse_values(args.set) if args.set else None, args.tol)
     total = time.perf_counter() - t0
     files: list[str] = []
     if args.out:
@@ -93,6 +105,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             "residual_amplitude_m": d["residual_amplitude_m"],
             "dominant_frequency_hz": d["dominant_frequency_hz"],
             "steps": d["steps"], "time_s": d["time_s"],
+            "step_error_estimate": d.get("error_estimate"),
             "residual_joint_condition": d["joint_condition"],
             "residual_reference_hz": d["reference_hz"], "frame": d["frame"],
         })

@@ -45,6 +45,8 @@ class VibrationReport:
         joint_condition: ``"locked"`` or ``"free"``: the joints during the residual vibration.
         reference_hz: Lowest eigenfrequencies of the final pose for that joint condition [Hz].
         steps, time_s: Integrator steps and compute time [s].
+        error_estimate: Richardson estimate of the time-step error of a prescribed motion
+            (``Simulation.error_estimate``; NaN for the adaptive integrators).
         y: Design values [kg] by name; final_q: final ERLS joint coordinates (user convention).
     """
 
@@ -64,6 +66,7 @@ class VibrationReport:
     time_s: float
     y: dict
     final_q: tuple[float, ...]
+    error_estimate: float = float("nan")
 
     def summary(self) -> dict:
         """The JSON-ready metrics (no time series)."""
@@ -75,6 +78,8 @@ class VibrationReport:
         d["final_q"] = [float(v) for v in self.final_q]
         d["dominant_frequency_hz"] = (None if not np.isfinite(self.dominant_frequency_hz)
                                       else float(self.dominant_frequency_hz))
+        d["error_estimate"] = (None if not np.isfinite(self.error_estimate)
+                               else float(self.error_estimate))
         return d
 
     def to_json(self, *, series: bool = False) -> str:
@@ -86,12 +91,14 @@ class VibrationReport:
         return json.dumps(d)
 
 
-def frame_deflection(dyn, sim, frame: str = "tool", xyz=(0.0, 0.0, 0.0)) -> np.ndarray:
+def frame_deflection(dyn, sim, frame: str = "tool", xyz=(0.0, 0.0, 0.0), *,
+                     spacing_s: float = 5e-3) -> np.ndarray:
     """World deflection (nt, 3) of a point of a link along a :class:`Simulation`.
 
     The maps ``T(q)``, ``S(q) A(q)`` are evaluated exactly at every output sample of a torque
-    drive and, for a prescribed motion, at 1 ms spacing along the motion (cubic spline in
-    time in between; they change with the pose only) and once for the held pose.
+    drive and, for a prescribed motion, every ``spacing_s`` along the motion (cubic spline in
+    time in between; they change with the pose only) and once for the held pose. On benchmark
+    A 5 ms changes the deflection by 1.4e-6 of its peak against 0.25 ms.
     """
     from scipy.interpolate import CubicSpline
 
@@ -112,7 +119,7 @@ def frame_deflection(dyn, sim, frame: str = "tool", xyz=(0.0, 0.0, 0.0)) -> np.n
     during = ~hold
     if np.any(during):
         td = t[during]
-        n = max(4, int(np.ceil((td[-1] - td[0]) / 1e-3)) + 1)
+        n = max(4, int(np.ceil((td[-1] - td[0]) / spacing_s)) + 1)
         grid = np.linspace(td[0], td[-1], n)
         qg = np.array([np.interp(grid, td, sim.q_physical[during, j])
                        for j in range(dyn.nv)]).T
@@ -184,7 +191,7 @@ def vibration_report(dyn, sim, *, name: str = "design", frame: str = "tool",
         dominant_frequency_hz=dominant_frequency(t[after], resid) if after.sum() > 8
         else float("nan"),
         joint_condition=sim.joint_condition, reference_hz=tuple(float(v) for v in ref),
-        steps=sim.steps, time_s=sim.time_s,
+        steps=sim.steps, time_s=sim.time_s, error_estimate=float(sim.error_estimate),
         y={d.name: float(v) for d, v in zip(dyn.model.design, dyn.y)},
         final_q=tuple(float(v) for v in sim.q[-1]),
     )

@@ -11,9 +11,13 @@ Example (all keys optional; the defaults shown)::
     frame = "tool"              # output link; point = [x, y, z] on it [m]
     point = [0.0, 0.0, 0.0]
     sample_hz = 5000.0          # output rate [Hz]
-    rtol = 1e-4                 # step control
+    # tol = 0.01                # prescribed drive (default: absent): the time step halves
+                                # until the Richardson estimate of the step error (relative
+                                # to the largest elastic coordinate) meets it
+    rtol = 1e-4                 # torque drive: step control
     atol = 1e-9                 # [m, rad]
-    rho_inf = 0.9               # generalized-alpha high-frequency spectral radius
+    rho_inf = 0.9               # torque drive: generalized-alpha high-frequency radius
+                                # (prescribed: 1, the trapezoidal rule, unless given)
     kp = 0.0                    # torque drive: PD gains on the motor angles [N m/rad]
     kd = 0.0                    #               [N m s/rad]
 
@@ -53,7 +57,8 @@ class SimulationSettings:
     sample_hz: float = 5000.0
     rtol: float = 1e-4
     atol: float = 1e-9
-    rho_inf: float = 0.9
+    rho_inf: float | None = None
+    tol: float | None = None
     kp: float = 0.0
     kd: float = 0.0
 
@@ -64,6 +69,7 @@ _NUMBERS = {  # key: (lower, upper, lower inclusive)
     "rtol": (0.0, 1.0, False),
     "atol": (0.0, math.inf, False),
     "rho_inf": (0.0, 1.0, True),
+    "tol": (0.0, 1.0, False),
     "kp": (0.0, math.inf, True),
     "kd": (0.0, math.inf, True),
 }
@@ -180,8 +186,7 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
     if settings.drive == "prescribed":
         sim = simulate_prescribed(dyn, trajectory, after_s=settings.after_s,
                                   damping=settings.damping, sample_hz=settings.sample_hz,
-                                  rtol=settings.rtol, atol=settings.atol,
-                                  rho_inf=settings.rho_inf)
+                                  rho_inf=settings.rho_inf, tol=settings.tol)
     else:
         from pinflex.dynamics.motion import JointMotion
 
@@ -190,6 +195,7 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
                               duration_s=motion.t1 - motion.t0 + settings.after_s,
                               kp=settings.kp, kd=settings.kd, damping=settings.damping,
                               sample_hz=settings.sample_hz, rtol=settings.rtol,
-                              atol=settings.atol, rho_inf=settings.rho_inf)
+                              atol=settings.atol,
+                              rho_inf=0.9 if settings.rho_inf is None else settings.rho_inf)
     rep = vibration_report(dyn, sim, name=name, frame=settings.frame, xyz=settings.point)
     return rep, sim, dyn

@@ -146,8 +146,19 @@ class ErlsDynamics:
             for link in self._links:
                 Jd[link][k] = pin.getFrameJacobianTimeVariation(
                     pm, pd, model.plan.frame_ids[link], pin.LOCAL) @ Cm
-        e, ed = root_twists(model, Cm @ q, Cm)
+        e, ed = self._root_twists(q)
         return J, Jd, R, e, ed
+
+    def _root_twists(self, q: np.ndarray):
+        """:func:`root_twists` at ``q`` with unit joint rates (the last pose is reused)."""
+        key = np.asarray(q, dtype=float).tobytes()
+        hit = getattr(self, "_rt_last", None)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        Cm = self.model.coord_map
+        out = root_twists(self.model, Cm @ np.asarray(q, dtype=float), Cm)
+        self._rt_last = (key, out)
+        return out
 
     def _maps(self, p: _Carriers, J, Jd, e, ed):
         """``W = [E, S]``, and per unit joint velocity ``G_k`` and ``Ṡ_k`` of a carrier group."""
@@ -241,7 +252,7 @@ class ErlsDynamics:
         model = self.model
         Cm = model.coord_map
         q = np.asarray(q, dtype=float)
-        e, ed = root_twists(model, Cm @ q, Cm)
+        e, ed = self._root_twists(q)
         nv, nx = self.nv, self.nx
         Ap = np.zeros((nv, nx))
         Adp = np.zeros((nv, nv, nx))
@@ -283,8 +294,7 @@ class ErlsDynamics:
             pin.updateFramePlacements(pm, pd)
             Rw = rotate_twist(pd.oMf[fid].rotation)
             JL = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ model.coord_map
-            e, _ = root_twists(model, model.coord_map @ q, np.zeros((model.nv, model.nv)))
-            el = e.get(link)
+            el = self._root_twists(q)[0].get(link)
             T = np.zeros((6, model.nx)) if att.const is None else att.const.copy()
             if att.lin is not None and el is not None:
                 T = T + att.lin @ el
