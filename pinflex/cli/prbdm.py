@@ -46,6 +46,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--poses", choices=("straight", "paper"), default="straight",
                         help="poses where frequencies are compared")
     parser.add_argument("--starts", type=int, default=8, help="multistart points per search")
+    parser.add_argument("--tol", type=float, default=None, metavar="TOL",
+                        help="pick the fewest joints (from --modes, default 1, up to --links) "
+                             "whose estimated combined error against the converged beam truth "
+                             "is at most TOL; the estimate is the combined fit's residual "
+                             "against that truth")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.add_argument("--html", default=None, metavar="FILE",
@@ -73,24 +78,49 @@ def run(args: argparse.Namespace) -> int:
         check_file_target(args.html, "--html")
     beam = (uniform_beam() if args.beam == "uniform"
             else random_beam(args.seed, n_sections=args.sections))
-    n_modes = args.modes if args.modes is not None else args.links
-    truth = compute_truth(beam, max(n_modes, 1))
-    fit = fit_prbdm(beam, args.links, n_modes, objective=args.objective,
-                    stiffness_law=args.stiffness_law, poses=args.poses,
-                    n_starts=args.starts, seed=args.seed, truth=truth,
-                    progress=not args.no_progress)
+    choice = None
+    if args.tol is not None:
+        from pinflex.prbdm.fidelity import links_for_tolerance
+
+        if args.objective != "combined" or args.stiffness_law != "segment" \
+                or args.poses != "straight":
+            raise ConfigurationError("--tol judges combined fits with the segment law at the "
+                                     "straight pose; drop --objective/--stiffness-law/--poses")
+        n_modes = args.modes if args.modes is not None else 1
+        truth = compute_truth(beam, max(n_modes, 1))
+        choice = links_for_tolerance(beam, args.tol, n_modes=n_modes, max_links=args.links,
+                                     n_starts=args.starts, seed=args.seed, truth=truth,
+                                     progress=not args.no_progress)
+        fit = choice.fit
+        args.links = choice.n_joints
+    else:
+        n_modes = args.modes if args.modes is not None else args.links
+        truth = compute_truth(beam, max(n_modes, 1))
+        fit = fit_prbdm(beam, args.links, n_modes, objective=args.objective,
+                        stiffness_law=args.stiffness_law, poses=args.poses,
+                        n_starts=args.starts, seed=args.seed, truth=truth,
+                        progress=not args.no_progress)
+    fidelity = None if choice is None else {
+        "tol": args.tol, "n_joints": choice.n_joints, "estimate": choice.estimate,
+        "estimator": "combined loss of the fit against the converged beam truth",
+        "truth_error": choice.truth_error,
+        "levels": [{"n_joints": n, "estimate": e, "eigen_error": g, "deflection_error": d}
+                   for n, e, g, d in choice.levels]}
     html = None
     if args.html:
         from pinflex.visualization import prbdm_preview_html
 
         html = str(prbdm_preview_html(beam, fit, args.html))
     if args.json:
-        if html is None:
+        if html is None and fidelity is None:
             print(fit.to_json())
         else:
             import json
 
-            print(json.dumps(dict(json.loads(fit.to_json()), html=html)))
+            extra: dict = {} if html is None else {"html": html}
+            if fidelity is not None:
+                extra["fidelity"] = fidelity
+            print(json.dumps(dict(json.loads(fit.to_json()), **extra)))
         return 0
     out = fit.to_dict()
     print(f"{args.links}R PRBDM of the {fit.beam} beam, objective {fit.objective}, "
@@ -99,6 +129,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"  stiffness [N m/rad] {[float(f'{v:.6g}') for v in out['stiffness']]}")
     print(f"  truth [Hz]         {[round(v, 4) for v in out['truth_hz']]}")
     print(f"  model [Hz]         {[round(v, 4) for v in out['model_hz']]}")
+    if choice is not None:
+        print(f"  --tol {args.tol:g}: {choice.n_joints}R is the fewest joints meeting it, "
+              f"estimated error {choice.estimate:.3e} (combined loss against the converged "
+              f"truth, whose own error is ~{choice.truth_error:.0e}); tried "
+              + ", ".join(f"{n}R {e:.2e}" for n, e, _, _ in choice.levels))
     print(f"  {fit.determinacy}: {fit.n_free_parameters} free parameters, "
           f"{fit.n_matched} matched quantities")
     if fit.exactly_determined:
