@@ -94,20 +94,24 @@ def monomials(space: JetSpace, dx: np.ndarray) -> np.ndarray:
     dx2 = dx[None, :] if single else dx
     if dx2.ndim != 2 or dx2.shape[1] != space.nvars:
         raise ValueError(f"dx has shape {dx.shape}; expected (nsamples, {space.nvars})")
-    # a table of powers δx_k^j (variable-major so each gather reads contiguous rows), then
-    # one gather per variable: few, large NumPy calls, since this runs at every evaluation
-    n, nv = dx2.shape
-    powers = np.empty((nv, space.order + 1, n), dtype=np.result_type(dx2, float))
-    powers[:, 0] = 1.0
-    if space.order:
-        np.cumprod(np.repeat(dx2.T[:, None, :], space.order, axis=1), axis=1,
-                   out=powers[:, 1:])
-    mi = space.multi_indices
-    mon = powers[0, mi[:, 0]]
-    for k in range(1, nv):
-        mon *= powers[k, mi[:, k]]
-    mon = mon.T
+    rows = monomial_rows(space, dx2.T, np.result_type(dx2, float))
+    mon = rows.T
     return mon[0] if single else mon
+
+
+def monomial_rows(space: JetSpace, dx_t: np.ndarray, dtype=float) -> np.ndarray:
+    """Monomials as rows: ``(ncoef, nsamples)`` from offsets ``dx_t`` (nvars, nsamples).
+
+    One copy of the offsets, then the contiguous products of
+    :attr:`JetSpace.monomial_plan` (each degree from the one below it).
+    """
+    rows = np.empty((space.ncoef, dx_t.shape[1]), dtype=dtype)
+    rows[0] = 1.0
+    if space.order:
+        rows[1 : 1 + space.nvars] = dx_t
+    for d0, d1, s0, s1, r in space.monomial_plan:
+        np.multiply(rows[s0:s1], rows[r], out=rows[d0:d1])
+    return rows
 
 
 def evaluate(space: JetSpace, jet: np.ndarray, dx: np.ndarray) -> np.ndarray:

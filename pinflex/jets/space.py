@@ -157,6 +157,30 @@ class JetSpace:
         return self.index[key]
 
     @cached_property
+    def monomial_plan(self) -> tuple[tuple[int, int, int, int, int], ...]:
+        """Row slices that build the monomials of degree ≥ 2 from those one degree lower.
+
+        In the graded, descending lexicographic order, the degree-``d`` multi-indices with
+        ``α_0 = … = α_{k−1} = 0 < α_k`` are ``e_k`` plus the degree-``(d − 1)`` ones with
+        ``α_0 = … = α_{k−1} = 0``, which are the *last* of their degree, in the same order. So
+        with the monomials stored as rows (``ncoef × nsamples``, row ``1 + k`` holding
+        ``δx_k``), every step ``(dst0, dst1, src0, src1, row)`` is one contiguous product
+        ``m[dst0:dst1] = m[src0:src1] * m[row]``: ``(order − 1) · nvars`` products in all, no
+        gathers and no Python loop over monomials or samples.
+        """
+        steps = []
+        off = self.degree_offsets
+        for d in range(2, self.order + 1):
+            dst = end_prev = int(off[d])  # the degree-(d - 1) block ends where d starts
+            for k in range(self.nvars):
+                count = math.comb(d - 1 + self.nvars - k - 1, self.nvars - k - 1)
+                steps.append((dst, dst + count, end_prev - count, end_prev, 1 + k))
+                dst += count
+            if dst != int(off[d + 1]):  # pragma: no cover - layout guard
+                raise AssertionError("monomial plan does not match the coefficient layout")
+        return tuple(steps)
+
+    @cached_property
     def matmul_plan(self) -> tuple[list[tuple[int, int, int, int]], sp.csr_matrix]:
         """Per-degree GEMM blocks and the sparse scatter of their outputs into coefficients.
 

@@ -19,6 +19,7 @@ from pinflex.exceptions import (
     TaylorRadiusWarning,
 )
 from pinflex.jets import JetSpace
+from pinflex.jets.evaluation import monomial_rows
 from pinflex.linalg import readonly as _readonly
 from pinflex.parametric.conditioned import expansion_eigenpairs, solver_matrix_jets
 from pinflex.parametric.eigen import eigen_jets, radius_estimate, spectrum_slopes
@@ -75,6 +76,7 @@ class TaylorModel:
         init=False, repr=False, compare=False)
     degree_blocks: Mapping[str, np.ndarray] = field(init=False, repr=False, compare=False)
     spectral_weights: np.ndarray | None = field(init=False, repr=False, compare=False)
+    evaluation_plan: _EvaluationPlan = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.freq_jets is None:
@@ -104,6 +106,7 @@ class TaylorModel:
         object.__setattr__(self, "degree_blocks", MappingProxyType(blocks))
         W = spectral_weights(self.modes, self.spectrum, self.spectrum_slopes)
         object.__setattr__(self, "spectral_weights", None if W is None else _readonly(W))
+        object.__setattr__(self, "evaluation_plan", _EvaluationPlan.build(self))
 
     @property
     def order(self) -> int:
@@ -244,7 +247,8 @@ class TaylorModel:
         est, ratio = self.error_estimate(dx, quantity=quantity, mon=mon)
         return self._report(est, ratio, tol, strict)
 
-    def _report(self, est: np.ndarray, ratio: np.ndarray, tol: float, strict: bool) -> float:
+    def _report(self, est: np.ndarray, ratio: np.ndarray, tol: float, strict: bool,
+                stacklevel: int = 3) -> float:
         worst = float(np.max(est)) if est.size else 0.0
         if worst > tol:
             s, c = np.unravel_index(int(np.argmax(est)), est.shape)
@@ -257,7 +261,7 @@ class TaylorModel:
                     "(pinflex.parametric.expand_along)")
             if strict:
                 raise TaylorRadiusExceeded(text)
-            warnings.warn(text, TaylorRadiusWarning, stacklevel=3)
+            warnings.warn(text, TaylorRadiusWarning, stacklevel=stacklevel)
         return worst
 
     def evaluate(self, Q, Y=None, *, quantity: str = "eigval", linear_in_design=False,
@@ -275,14 +279,43 @@ class TaylorModel:
             strict: Raise :class:`~pinflex.exceptions.TaylorRadiusExceeded` there instead.
             tol: Relative error level of the check.
         """
-        dx = self.offsets(Q, Y, warn=False)
-        mon = jets.monomials(self.space, dx)
+        plan = self.evaluation_plan
+        key = (quantity, bool(linear_in_design))
+        if key not in plan.values:
+            self.jet(quantity)  # names the bad quantity
+        Qa = np.asarray(Q, dtype=float)
+        if plan.q0_col is not None and Y is None and Qa.ndim == 2 and Qa.shape[1] == plan.nq:
+            # all joints expanded, in order, no design: the offsets go straight into the rows
+            rows = np.empty((plan.ncoef, Qa.shape[0]))
+            rows[0] = 1.0
+            if plan.ncoef > 1:
+                np.subtract(Qa.T, plan.q0_col, out=rows[1 : 1 + plan.nvars])
+            for d0, d1, s0, s1, r in plan.steps:
+                np.multiply(rows[s0:s1], rows[r], out=rows[d0:d1])
+            dx = None
+        else:
+            dx = self.offsets(Qa, Y, warn=False)
+            rows = monomial_rows(self.space, dx.T)
         if not (warn or strict):
-            return mon @ self.coefficients(quantity, linear_in_design=bool(linear_in_design))
-        # one product gives the per-degree contributions for the check and, summed, the value
+            return (plan.values[key] @ rows).T
+        checked = plan.checked.get(key)
+        if checked is None:  # no screen for this model (order 0, a vanishing eigenvalue)
+            return self._checked_slow(rows.T, dx, Qa, Y, key, tol, strict)
+        # one product: the value and, per check row, every sample's order-j part or rate
+        S = checked @ rows
+        k = plan.k
+        if plan.screen_passes(np.abs(S[k:]).max(axis=1).tolist(), tol):
+            return S[:k].T
+        return self._checked_slow(rows.T, dx, Qa, Y, key, tol, strict)
+
+    def _checked_slow(self, mon, dx, Q, Y, key, tol, strict):
+        """The per-sample estimate and report (:meth:`error_estimate`) and the value."""
+        if dx is None:
+            dx = self.offsets(Q, Y, warn=False)
+        quantity, linear = key
         est, ratio, value = self._estimate_from(dx, mon @ self.degree_blocks[quantity])
-        self._report(est, ratio, tol, strict)
-        if linear_in_design:
+        self._report(est, ratio, tol, strict, stacklevel=4)
+        if linear:
             return mon @ self.coefficients(quantity, linear_in_design=True)
         return value
 
@@ -321,6 +354,112 @@ class TaylorModel:
         dq = self.offsets(Q, None)[:, : len(self.joint_idx)]
         mon = jets.monomials(qspace, dq)
         return mon @ l0, np.einsum("nc,jck->nkj", mon, l1)
+
+
+@dataclass(frozen=True)
+class _EvaluationPlan:
+    """What :meth:`TaylorModel.evaluate` precomputes: monomial steps, coefficient matrices.
+
+    ``values[(quantity, linear)]`` is the transposed (k, ncoef) coefficient matrix of the
+    value; the monomials are rows (ncoef, nsamples), so one GEMM gives all values.
+    ``checked[(quantity, linear)]`` stacks below it the rows of the radius screen: for every
+    order ``j`` the check reads (the upper half and ``p − 1``), the order-``j`` coefficients
+    divided by ``|c_0|`` (a row of ``checked @ mon`` is ``c_j t^j / |c_0|`` at each sample),
+    and the spectral meeting rates ``v·(∇λ_j − ∇λ_i)·2/|λ_j − λ_i|`` on the first-order
+    monomials.
+
+    The screen (:meth:`screen_passes`) takes the largest magnitude of each row over the
+    samples and evaluates the estimate of :meth:`TaylorModel.error_estimate` on them. The
+    estimate grows with each of them, so this is an upper bound of the worst per-sample
+    estimate: when it meets ``tol`` no sample can fail and the per-sample estimate is skipped;
+    otherwise the per-sample estimate runs and decides (and words the warning) exactly as
+    before. Same decisions, same messages.
+    """
+
+    ncoef: int
+    nvars: int
+    nq: int
+    k: int
+    q0_col: np.ndarray | None
+    steps: tuple[tuple[int, int, int, int, int], ...]
+    values: Mapping[tuple[str, bool], np.ndarray]
+    checked: Mapping[tuple[str, bool], np.ndarray]
+    root: tuple[tuple[int, float], ...]  # (group, 1/j) of the root-test orders
+    spec: tuple[int, ...]  # groups of the spectral rates
+    last: int  # group of order p
+    before_last: int  # group of order p - 1 (-1: the constant, ratio 1)
+    ncheck: int
+
+    @classmethod
+    def build(cls, tm: TaylorModel) -> _EvaluationPlan:
+        space, p, k = tm.space, tm.order, len(tm.modes)
+        nq = tm.q0.size
+        direct = not tm.design_idx and tuple(tm.joint_idx) == tuple(range(nq))
+        q0_col = np.ascontiguousarray(tm.q0[:, None]) if direct else None
+        values = {key: _readonly(np.ascontiguousarray(c.T))
+                  for key, c in tm.coefficient_matrices.items()}
+        checked: dict[tuple[str, bool], np.ndarray] = {}
+        off = space.degree_offsets
+        j0 = max(1, (p + 1) // 2)
+        orders = sorted(set(range(j0, p + 1)) | {p - 1} - {0}) if p >= 1 else []
+        W = tm.spectral_weights
+        w = 0 if W is None else W.shape[1] // k
+        groups = len(orders) + w
+        root = tuple((g, 1.0 / j) for g, j in enumerate(orders) if j >= j0)
+        spec = tuple(range(len(orders), groups))
+        for (quantity, linear), value in values.items():
+            full = tm.coefficient_matrices[quantity, False]
+            c0 = np.abs(full[0])
+            if p < 1 or not np.all(c0 > 1e-250) or not np.all(np.isfinite(full)):
+                continue
+            cols = np.zeros((space.ncoef, groups, k))
+            for g, j in enumerate(orders):
+                cols[off[j] : off[j + 1], g] = full[off[j] : off[j + 1]] / c0
+            if W is not None and w:
+                cols[1 : 1 + space.nvars, len(orders):] = W.reshape(-1, k, w).transpose(0, 2, 1)
+            checked[quantity, linear] = _readonly(np.ascontiguousarray(
+                np.concatenate([value, cols.reshape(space.ncoef, groups * k).T], axis=0)))
+        return cls(
+            ncoef=space.ncoef, nvars=space.nvars, nq=nq, k=k, q0_col=q0_col,
+            steps=space.monomial_plan if space.order else (),
+            values=MappingProxyType(values), checked=MappingProxyType(checked),
+            root=root, spec=spec, last=orders.index(p) if p >= 1 else -1,
+            before_last=orders.index(p - 1) if p - 1 in orders else -1,
+            ncheck=groups * k,
+        )
+
+    def screen_passes(self, colmax: list[float], tol: float) -> bool:
+        """True when the bound of the estimate over all samples meets ``tol`` (see above).
+
+        ``colmax``: largest magnitude over the samples of each check row of
+        ``checked @ mon``.
+        """
+        k = self.k
+        bound = tol * (1.0 - 1e-9)  # rounding margin: undecided cases go per sample
+        for c in range(k):
+            rho = 0.0
+            for g, inv_j in self.root:
+                i = g * k + c
+                r = colmax[i] ** inv_j
+                if not r <= rho:  # NaN propagates: the per-sample path then decides
+                    rho = r
+            for g in self.spec:
+                i = g * k + c
+                r = colmax[i]
+                if not r <= rho:
+                    rho = r
+            if not rho < 1.0:
+                return False
+            i = self.last * k + c
+            tail = colmax[i]
+            if self.before_last >= 0:
+                i = self.before_last * k + c
+                tail = max(tail, rho * colmax[i])
+            else:
+                tail = max(tail, rho)
+            if not tail * rho / max(1.0 - rho, 1e-12) <= bound:
+                return False
+        return True
 
 
 def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence[int] = (1,),
