@@ -37,3 +37,24 @@ def test_ur5_eigenvalue_jets_equal_nodal_coordinate_jets():
         s = space.degree_slice(d)
         scale = np.abs(lam[s]).max(axis=0)
         assert np.max(np.abs(tm.eigval_jets[s] - lam[s]) / scale) < 1e-9
+
+
+def test_static_joints_are_those_the_spectrum_ignores():
+    """Static joints: the UR5's base pan joint; none on benchmark A.
+
+    The UR5's frequencies do not change with the pan angle (the shoulder lift's do);
+    benchmark A in absolute angles has none (its first coordinate also sets link 2's angle).
+    """
+    from pinflex.assignment.benchmark_a import benchmark_model
+    from pinflex.parametric.conditioned import static_joints
+
+    model = FlexibleModel(UR5)
+    assert static_joints(model) == {0}
+    assert static_joints(benchmark_model()) == frozenset()
+    q = np.array([0.0, -1.0, 1.2, 0.3, 0.5, 0.0])
+    Q = np.repeat(q[None], 3, axis=0)
+    Q[1, 0] += 0.9  # pan
+    Q[2, 1] += 0.9  # shoulder lift
+    f = model.frequencies(Q, n_modes=4)
+    np.testing.assert_allclose(f[1], f[0], rtol=1e-11)
+    assert np.max(np.abs(f[2] / f[0] - 1)) > 1e-3

@@ -10,7 +10,7 @@ import scipy.linalg as sla
 
 from pinflex import jets as J
 from pinflex.exceptions import EigenSolverError, RepeatedEigenvalue
-from pinflex.parametric.eigen import eigen_jets, find_cluster, radius_estimate
+from pinflex.parametric.eigen import eigen_jets, find_cluster, radius_estimate, spectrum_slopes
 
 
 def _spd(rng, n, shift):
@@ -322,3 +322,20 @@ def test_invalid_inputs_raise():
         eigen_jets(space, M, K, [0], eigvals0=w, eigvecs0=V[:, [1]])
     with pytest.raises(ValueError, match="together"):
         eigen_jets(space, M, K, 0, eigvals0=w)
+
+
+def test_constant_stiffness_as_one_matrix_equals_its_jet():
+    """A 2-D stiffness (constant) gives the jets and slopes of the same stiffness as a jet."""
+    family = _dense_family(seed=6)
+    space = J.JetSpace(3, 4)
+    M, K = family.jets(space)
+    K_const = np.zeros_like(K)
+    K_const[0] = K[0]
+    lam, phi = eigen_jets(space, M, K_const, [0, 2, 3])
+    lam2, phi2 = eigen_jets(space, M, K[0], [0, 2, 3])
+    np.testing.assert_allclose(lam2, lam, rtol=1e-13, atol=1e-13 * np.abs(lam).max())
+    np.testing.assert_allclose(phi2, phi, rtol=1e-12, atol=1e-12 * np.abs(phi).max())
+    w, V = sla.eigh(K[0], M[0])
+    np.testing.assert_allclose(spectrum_slopes(space, M, K[0], w, V),
+                               spectrum_slopes(space, M, K_const, w, V), rtol=1e-13, atol=1e-12)
+    assert np.abs(lam[1:]).max() > 1e-3 * np.abs(lam[0]).max()  # M alone moves λ

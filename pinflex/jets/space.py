@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
-from typing import TYPE_CHECKING
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +27,55 @@ def _compositions(degree: int, nvars: int) -> Iterator[tuple[int, ...]]:
 def _readonly(array: np.ndarray) -> np.ndarray:
     array.setflags(write=False)
     return array
+
+
+@lru_cache(maxsize=64)
+def _layout(nvars: int, order: int) -> dict[str, Any]:
+    """Coefficient layout of a jet space (the arrays of :class:`JetSpace`), built once."""
+    alphas = [a for d in range(order + 1) for a in _compositions(d, nvars)]
+    mi = np.array(alphas, dtype=np.int64).reshape(len(alphas), nvars)
+    degrees = mi.sum(axis=1)
+    offsets = np.searchsorted(degrees, np.arange(order + 2), side="left")
+    index = {a: i for i, a in enumerate(alphas)}
+    fact = np.array([math.prod(math.factorial(int(k)) for k in a) for a in alphas], float)
+
+    # Product table: every pair (i, j) with |α_i| + |α_j| ≤ order.
+    pa_list, pb_list, pc_list = [], [], []
+    for i, ai in enumerate(alphas):
+        jmax = int(offsets[order - sum(ai) + 1])
+        js = np.arange(jmax)
+        sums = mi[js] + mi[i]
+        pa_list.append(np.full(jmax, i))
+        pb_list.append(js)
+        pc_list.append(np.array([index[tuple(s)] for s in sums.tolist()], dtype=np.int64))
+    pa, pb, pc = (np.concatenate(x) for x in (pa_list, pb_list, pc_list))
+    perm = np.lexsort((pb, pa, pc))
+    pa, pb, pc = pa[perm], pb[perm], pc[perm]
+    starts = np.searchsorted(pc, np.arange(len(alphas)), side="left")
+
+    parent = np.full(len(alphas), -1, dtype=np.int64)
+    parent_var = np.full(len(alphas), -1, dtype=np.int64)
+    for i, a in enumerate(alphas[1:], start=1):
+        k = next(k for k, ak in enumerate(a) if ak > 0)
+        parent_var[i] = k
+        parent[i] = index[a[:k] + (a[k] - 1,) + a[k + 1 :]]
+
+    out: dict[str, Any] = {}
+    for name, value in (
+        ("multi_indices", mi),
+        ("degrees", degrees),
+        ("degree_offsets", offsets),
+        ("factorials", fact),
+        ("pair_a", pa),
+        ("pair_b", pb),
+        ("pair_c", pc),
+        ("pair_starts", starts),
+        ("parent", parent),
+        ("parent_var", parent_var),
+    ):
+        out[name] = _readonly(value)
+    out["index"] = index
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,49 +131,9 @@ class JetSpace:
         nvars, order = int(self.nvars), int(self.order)
         object.__setattr__(self, "nvars", nvars)
         object.__setattr__(self, "order", order)
-
-        alphas = [a for d in range(order + 1) for a in _compositions(d, nvars)]
-        mi = np.array(alphas, dtype=np.int64).reshape(len(alphas), nvars)
-        degrees = mi.sum(axis=1)
-        offsets = np.searchsorted(degrees, np.arange(order + 2), side="left")
-        index = {a: i for i, a in enumerate(alphas)}
-        fact = np.array([math.prod(math.factorial(int(k)) for k in a) for a in alphas], float)
-
-        # Product table: every pair (i, j) with |α_i| + |α_j| ≤ order.
-        pa_list, pb_list, pc_list = [], [], []
-        for i, ai in enumerate(alphas):
-            jmax = int(offsets[order - sum(ai) + 1])
-            js = np.arange(jmax)
-            sums = mi[js] + mi[i]
-            pa_list.append(np.full(jmax, i))
-            pb_list.append(js)
-            pc_list.append(np.array([index[tuple(s)] for s in sums.tolist()], dtype=np.int64))
-        pa, pb, pc = (np.concatenate(x) for x in (pa_list, pb_list, pc_list))
-        perm = np.lexsort((pb, pa, pc))
-        pa, pb, pc = pa[perm], pb[perm], pc[perm]
-        starts = np.searchsorted(pc, np.arange(len(alphas)), side="left")
-
-        parent = np.full(len(alphas), -1, dtype=np.int64)
-        parent_var = np.full(len(alphas), -1, dtype=np.int64)
-        for i, a in enumerate(alphas[1:], start=1):
-            k = next(k for k, ak in enumerate(a) if ak > 0)
-            parent_var[i] = k
-            parent[i] = index[a[:k] + (a[k] - 1,) + a[k + 1 :]]
-
-        for name, value in (
-            ("multi_indices", mi),
-            ("degrees", degrees),
-            ("degree_offsets", offsets),
-            ("factorials", fact),
-            ("pair_a", pa),
-            ("pair_b", pb),
-            ("pair_c", pc),
-            ("pair_starts", starts),
-            ("parent", parent),
-            ("parent_var", parent_var),
-        ):
-            object.__setattr__(self, name, _readonly(value))
-        object.__setattr__(self, "index", index)
+        # the layout depends only on (nvars, order): built once, shared (read-only arrays)
+        for name, value in _layout(nvars, order).items():
+            object.__setattr__(self, name, value)
 
     @property
     def ncoef(self) -> int:
@@ -156,7 +165,7 @@ class JetSpace:
             )
         return self.index[key]
 
-    @cached_property
+    @property
     def monomial_plan(self) -> tuple[tuple[int, int, int, int, int], ...]:
         """Row slices that build the monomials of degree ≥ 2 from those one degree lower.
 
@@ -168,6 +177,19 @@ class JetSpace:
         ``m[dst0:dst1] = m[src0:src1] * m[row]``: ``(order − 1) · nvars`` products in all, no
         gathers and no Python loop over monomials or samples.
         """
+        return _monomial_plan(self)
+
+    @property
+    def matmul_plan(self) -> tuple[list[tuple[int, int, int, int]], sp.csr_matrix]:
+        """Per-degree GEMM blocks and the sparse scatter of their outputs into coefficients.
+
+        For each degree ``d`` of the left factor, every left coefficient of degree ``d`` times
+        every right coefficient of degree ≤ ``order - d`` is a valid pair; the pairs are laid
+        out as ``(left, right)`` row-major, the order in which one GEMM produces them.
+        """
+        return _matmul_plan(self)
+
+    def _build_monomial_plan(self) -> tuple[tuple[int, int, int, int, int], ...]:
         steps = []
         off = self.degree_offsets
         for d in range(2, self.order + 1):
@@ -180,14 +202,7 @@ class JetSpace:
                 raise AssertionError("monomial plan does not match the coefficient layout")
         return tuple(steps)
 
-    @cached_property
-    def matmul_plan(self) -> tuple[list[tuple[int, int, int, int]], sp.csr_matrix]:
-        """Per-degree GEMM blocks and the sparse scatter of their outputs into coefficients.
-
-        For each degree ``d`` of the left factor, every left coefficient of degree ``d`` times
-        every right coefficient of degree ≤ ``order - d`` is a valid pair; the pairs are laid
-        out as ``(left, right)`` row-major, the order in which one GEMM produces them.
-        """
+    def _build_matmul_plan(self) -> tuple[list[tuple[int, int, int, int]], sp.csr_matrix]:
         blocks, targets = [], []
         off = self.degree_offsets
         for d in range(self.order + 1):
@@ -212,6 +227,16 @@ class JetSpace:
 
     def __hash__(self) -> int:
         return hash((JetSpace, self.nvars, self.order))
+
+
+@lru_cache(maxsize=64)
+def _monomial_plan(space: JetSpace) -> tuple[tuple[int, int, int, int, int], ...]:
+    return space._build_monomial_plan()
+
+
+@lru_cache(maxsize=64)
+def _matmul_plan(space: JetSpace) -> tuple[list[tuple[int, int, int, int]], sp.csr_matrix]:
+    return space._build_matmul_plan()
 
 
 def _check_jet(space: JetSpace, jet: np.ndarray, name: str = "jet") -> np.ndarray:

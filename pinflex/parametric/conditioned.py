@@ -81,15 +81,31 @@ class SparseJetAlgebra:
         return out.reshape(nc, n, r)
 
 
-def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
-                       joints: Sequence[str] | None = None,
-                       design: Sequence[str] | None = None):
-    """Exact Taylor coefficients of ``M`` and ``K`` over the solver coordinates ``[w; q]``.
+def static_joints(model: FlexibleModel) -> frozenset[int]:
+    """User joints whose values cannot enter the solver-coordinate pencil.
 
-    Same arguments and returns as :func:`pinflex.parametric.matrix_jets`; only the
-    coordinates of the matrices differ (their eigenvalues are the same).
+    A joint that hangs from a rigid link welded to the root (through fixed joints only) turns
+    its whole subtree as one rigid motion of an otherwise still world: every frame Jacobian
+    and twist of the solver coordinates is expressed in the moving bodies' own frames, so
+    ``M`` and ``K`` do not depend on its value (for instance a robot's base pan joint). A user
+    coordinate that also drives other joints (coupled or absolute angles) is not static.
     """
-    q0, y0, joint_idx, design_idx, order = expansion_variables(model, q0, y0, order, joints, design)
+    flexible = set(solve.solve_plan(model).cores)
+    still = {model.plan.root} - flexible
+    for j in model.plan.joints:  # parents come before children
+        if j.kind == "fixed" and j.parent in still and j.child not in flexible:
+            still.add(j.child)
+    out = set()
+    C = model.coord_map
+    for u in range(model.nv):
+        drives = [j for j in model.plan.joints if j.user_col >= 0 and C[j.user_col, u] != 0.0]
+        if drives and all(j.parent in still for j in drives):
+            out.add(u)
+    return frozenset(out)
+
+
+def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int):
+    """Mass jet over ``joint_idx`` + ``design_idx`` (and the space), in solver coordinates."""
     space = JetSpace(len(joint_idx) + len(design_idx), int(order))
     nj, nd = len(joint_idx), len(design_idx)
     if nj:
@@ -102,10 +118,8 @@ def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
         alphas = [()]
     zeros = (0,) * nd
     emb = np.array([space.index[a + zeros] for a in alphas])
-    shape = (space.ncoef,) + Mq.shape[1:]
-    M, K = np.zeros(shape), np.zeros(shape)
+    M = np.zeros((space.ncoef,) + Mq.shape[1:])
     M[emb] = Mq
-    K[0, : model.nx, : model.nx] = np.eye(model.nx)
     for j in range(model.ny):
         M[emb] += y0[j] * Mdq[j]
         if j in design_idx:
@@ -114,7 +128,63 @@ def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
             low = [i for i, a in enumerate(alphas) if sum(a) < order]
             shifted = np.array([space.index[alphas[i] + unit] for i in low], dtype=int)
             M[shifted] += Mdq[j][low]
+    return space, M
+
+
+def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
+                       joints: Sequence[str] | None = None,
+                       design: Sequence[str] | None = None):
+    """Exact Taylor coefficients of ``M`` and ``K`` over the solver coordinates ``[w; q]``.
+
+    Same arguments and returns as :func:`pinflex.parametric.matrix_jets`; only the
+    coordinates of the matrices differ (their eigenvalues are the same).
+    """
+    q0, y0, joint_idx, design_idx, order = expansion_variables(model, q0, y0, order, joints, design)
+    space, M = _mass_jets(model, q0, y0, joint_idx, design_idx, order)
+    K = np.zeros_like(M)
+    K[0, : model.nx, : model.nx] = np.eye(model.nx)
     return space, M, K, joint_idx, design_idx
+
+
+def reduced_solver_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
+                        joints: Sequence[str] | None = None,
+                        design: Sequence[str] | None = None):
+    """The mass jet over the variables that can change it, and the constant stiffness.
+
+    Like :func:`solver_matrix_jets`, but the expanded joints that cannot enter the pencil
+    (:func:`static_joints`) are left out of the jet space: every coefficient that involves
+    them is exactly zero, so the eigenvalue jets over the full space are those over the
+    reduced one, embedded (:func:`embed`).
+
+    Returns:
+        ``(full_space, space, keep, M, K0, joint_idx, design_idx)``: the space of all
+        expanded variables, the reduced space, the full-space variable of each reduced one,
+        the mass jet (space.ncoef, nd, nd), the stiffness (nd, nd), and the expanded indices.
+    """
+    q0, y0, joint_idx, design_idx, order = expansion_variables(model, q0, y0, order, joints, design)
+    nj = len(joint_idx)
+    full_space = JetSpace(nj + len(design_idx), int(order))
+    static = static_joints(model)
+    live = [k for k, j in enumerate(joint_idx) if j not in static]
+    if not live and not design_idx:  # nothing moves the spectrum: keep one variable
+        live = [0]
+    keep = live + list(range(nj, nj + len(design_idx)))
+    space, M = _mass_jets(model, q0, y0, [joint_idx[k] for k in live], design_idx, order)
+    K0 = np.zeros(M.shape[1:])
+    K0[: model.nx, : model.nx] = np.eye(model.nx)
+    return full_space, space, keep, M, K0, joint_idx, design_idx
+
+
+def embed(full_space: JetSpace, space: JetSpace, keep: Sequence[int], jet: np.ndarray):
+    """A jet over the variables ``keep`` of ``full_space`` as a jet over all of them."""
+    if space == full_space:
+        return jet
+    rows = np.zeros((space.ncoef, full_space.nvars), dtype=np.int64)
+    rows[:, list(keep)] = space.multi_indices
+    pos = [full_space.index[tuple(r)] for r in rows.tolist()]
+    out = np.zeros((full_space.ncoef,) + jet.shape[1:], dtype=jet.dtype)
+    out[pos] = jet
+    return out
 
 
 def expansion_eigenpairs(model: FlexibleModel, M0: np.ndarray):

@@ -146,16 +146,17 @@ def _relative_gap(w: np.ndarray, mode: int, atol: float) -> float:
 
 
 def _check_pencil(space: JetSpace, M_jet: np.ndarray, K_jet: np.ndarray) -> int:
-    for name, jet in (("M_jet", M_jet), ("K_jet", K_jet)):
+    jets = (("M_jet", M_jet), ("K_jet", K_jet)) if K_jet.ndim != 2 else (("M_jet", M_jet),)
+    for name, jet in jets:
         if jet.ndim != 3 or jet.shape[0] != space.ncoef or jet.shape[1] != jet.shape[2]:
             raise ValueError(
                 f"{name} has shape {jet.shape}; expected ({space.ncoef}, n, n): a jet of square "
                 "matrices on this space"
             )
-    if M_jet.shape != K_jet.shape:
+    if K_jet.shape[-2:] != M_jet.shape[1:] or (K_jet.ndim == 3 and M_jet.shape != K_jet.shape):
         raise ValueError(f"M_jet {M_jet.shape} and K_jet {K_jet.shape} differ in shape")
     n = M_jet.shape[1]
-    for name, mat in (("M", M_jet[0]), ("K", K_jet[0])):
+    for name, mat in (("M", M_jet[0]), ("K", K_jet if K_jet.ndim == 2 else K_jet[0])):
         scale = max(float(np.max(np.abs(mat))), np.finfo(float).tiny)
         if np.max(np.abs(mat - mat.T)) > 1e-10 * scale:
             raise ValueError(f"{name}(x0) is not symmetric; the recursion needs symmetric M, K")
@@ -201,7 +202,9 @@ def eigen_jets(
         space: Jet space of the expansion (``nvars`` variables, order ``p``).
         M_jet: Jet of the mass matrix, shape ``(ncoef, n, n)``; ``M(x0)`` symmetric
             positive definite.
-        K_jet: Jet of the stiffness matrix, shape ``(ncoef, n, n)``; ``K(x0)`` symmetric.
+        K_jet: Jet of the stiffness matrix, shape ``(ncoef, n, n)``; ``K(x0)`` symmetric. A
+            single ``(n, n)`` matrix is a stiffness that does not depend on the variables
+            (its products in the recursion are skipped).
         modes: Index or indices into the ascending eigenvalues of ``(K(x0), M(x0))``.
         eigvals0: All eigenvalues at ``x0`` [rad²/s²], ascending, shape ``(n,)``; computed
             with ``scipy.linalg.eigh`` when omitted. Give it together with ``eigvecs0``.
@@ -227,7 +230,7 @@ def eigen_jets(
     M_jet = np.asarray(M_jet, dtype=float)
     K_jet = np.asarray(K_jet, dtype=float)
     n = _check_pencil(space, M_jet, K_jet)
-    M0, K0 = M_jet[0], K_jet[0]
+    M0, K0 = M_jet[0], (K_jet if K_jet.ndim == 2 else K_jet[0])
     mode_list = [int(m) for m in np.atleast_1d(modes)]
     if not mode_list or any(not 0 <= m < n for m in mode_list):
         raise ValueError(f"modes = {mode_list}: give indices in 0..{n - 1}")
@@ -310,7 +313,8 @@ def _recursion(
     push, inner = _recursion_plan(space)
     M0 = M_jet[0]
     M_rows = M_jet.reshape(ncoef * n, n)  # views: the a ≠ 0 factors of a push are rows
-    K_rows = K_jet.reshape(ncoef * n, n)  # n .. a_stop·n
+    # n .. a_stop·n; a constant stiffness (2-D) has no a ≠ 0 factor: v stays zero
+    pushed = [(u, M_rows)] if K_jet.ndim == 2 else [(u, M_rows), (v, K_jet.reshape(ncoef * n, n))]
 
     for d in range(p + 1):
         if d >= 1:
@@ -338,7 +342,7 @@ def _recursion(
             a_stop, bsl, scatter = push[d]
             na, nb = a_stop - 1, bsl.stop - bsl.start
             phis = phi[bsl].transpose(1, 0, 2).reshape(n, nb * nm)
-            for acc, rows in ((u, M_rows), (v, K_rows)):
+            for acc, rows in pushed:
                 prod = (rows[n : a_stop * n] @ phis).reshape(na, n, nb, nm)
                 prod = prod.transpose(0, 2, 1, 3).reshape(na * nb, n * nm)
                 acc += (scatter @ prod).reshape(ncoef, n, nm)
@@ -416,7 +420,7 @@ def spectrum_slopes(space: JetSpace, M_jet: np.ndarray, K_jet: np.ndarray,
     Args:
         space: Jet space (order ≥ 1).
         M_jet: Mass-matrix jet (ncoef, n, n).
-        K_jet: Stiffness-matrix jet (ncoef, n, n).
+        K_jet: Stiffness-matrix jet (ncoef, n, n), or one (n, n) matrix (constant).
         eigvals: Eigenvalues at ``x0`` (m,) [rad²/s²].
         eigvecs: Their eigenvectors (n, m), ``M(x0)``-normalised.
 
@@ -428,7 +432,8 @@ def spectrum_slopes(space: JetSpace, M_jet: np.ndarray, K_jet: np.ndarray,
     first = [space.position([1 if k == a else 0 for k in range(space.nvars)])
              for a in range(space.nvars)]
     V = np.asarray(eigvecs, dtype=float)
-    KV = np.einsum("aij,jm->aim", K_jet[first], V)
     MV = np.einsum("aij,jm->aim", M_jet[first], V)
-    return np.einsum("im,aim->am", V, KV) - np.asarray(eigvals)[None, :] * np.einsum(
-        "im,aim->am", V, MV)
+    out = -np.asarray(eigvals)[None, :] * np.einsum("im,aim->am", V, MV)
+    if np.ndim(K_jet) == 3:
+        out += np.einsum("im,aim->am", V, np.einsum("aij,jm->aim", K_jet[first], V))
+    return out

@@ -21,7 +21,7 @@ from pinflex.exceptions import (
 from pinflex.jets import JetSpace
 from pinflex.jets.evaluation import monomial_rows
 from pinflex.linalg import readonly as _readonly
-from pinflex.parametric.conditioned import expansion_eigenpairs, solver_matrix_jets
+from pinflex.parametric.conditioned import embed, expansion_eigenpairs, reduced_solver_jets
 from pinflex.parametric.eigen import eigen_jets, radius_estimate, spectrum_slopes
 from pinflex.parametric.matrices import matrix_jets
 
@@ -505,11 +505,17 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
     n_design = model.ny if design is None else len(design)
     check_taylor((model.nv if joints is None else len(joints)) + n_design, order, model.ndof,
                  n_design)
-    jets_of = solver_matrix_jets if solve.supported(model) else matrix_jets
-    space, M, K, jidx, didx = jets_of(model, q0, y0, order=order, joints=joints, design=design)
     idx = [model.n_rigid + m - 1 for m in modes]
+    solver = solve.supported(model)
+    if solver:  # solver coordinates: constant stiffness, only the joints that change M
+        space, rspace, keep, M, K, jidx, didx = reduced_solver_jets(
+            model, q0, y0, order=order, joints=joints, design=design)
+    else:
+        space, M, K, jidx, didx = matrix_jets(model, q0, y0, order=order, joints=joints,
+                                              design=design)
+        rspace, keep = space, list(range(space.nvars))
     try:
-        if jets_of is solver_matrix_jets:
+        if solver:
             w, V = expansion_eigenpairs(model, M[0])
         else:
             w, V = sla.eigh(K[0], M[0], check_finite=False)
@@ -520,9 +526,11 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         ) from exc
     big = np.argmax(np.abs(V), axis=0)
     V = V * np.sign(V[big, np.arange(V.shape[1])])
-    lam, _ = eigen_jets(space, M, K, idx, eigvals0=w, eigvecs0=V)
+    lam, _ = eigen_jets(rspace, M, K, idx, eigvals0=w, eigvecs0=V)
+    lam = embed(space, rspace, keep, lam)
     elastic = slice(model.n_rigid, None)
-    slopes = spectrum_slopes(space, M, K, w[elastic], V[:, elastic])
+    slopes = np.zeros((space.nvars, model.ndof - model.n_rigid))
+    slopes[keep] = spectrum_slopes(rspace, M, K, w[elastic], V[:, elastic])
     spectrum = w[elastic].copy()
     # estimated radius (nvars, k) along each variable axis: min of coefficient and spectrum
     W = spectral_weights(modes, spectrum, slopes)
