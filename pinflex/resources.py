@@ -10,7 +10,10 @@ much it would need and what to change, a long one warns a :class:`CostWarning`.
 
 The memory limit is half of the memory available when pinflex starts the computation (from
 ``/proc/meminfo``; 4 GiB where that is unknown); the environment variable
-``PINFLEX_MAX_MEMORY_GB`` sets it explicitly. Taylor orders above :data:`MAX_TAYLOR_ORDER`
+``PINFLEX_MAX_MEMORY_GB`` sets it explicitly. Requests of at most :data:`ALWAYS_ALLOWED_BYTES`
+are accepted without reading ``/proc/meminfo`` (a file read on every small call would cost
+more than the modal analysis it guards); the variable, when set, is still read and checked.
+Taylor orders above :data:`MAX_TAYLOR_ORDER`
 are refused outright: the cost grows combinatorially, and an order beyond 12 buys nothing
 that several expansion points (:func:`pinflex.parametric.expand_along`) do not give cheaper.
 """
@@ -29,25 +32,37 @@ MAX_TAYLOR_ORDER = 12
 #: Above this estimated time [s] a computation warns before it starts.
 WARN_SECONDS = 60.0
 
+#: Requests up to this size [bytes] are never refused for the available memory (16 MiB: a
+#: single-pose dense modal analysis of about 600 dof); ``PINFLEX_MAX_MEMORY_GB`` still applies.
+ALWAYS_ALLOWED_BYTES = 16 * 2**20
+
 _BYTES = 8
 _DENSE_COPIES = 6
 _FLOPS_PER_S = 2e9  # a conservative dense LAPACK rate on one core
 _JET_S_PER_PRODUCT = 1e-7  # per coefficient product and matrix entry (benchmark A, p = 12)
 
 
+def _env_limit_bytes() -> int | None:
+    """``PINFLEX_MAX_MEMORY_GB`` in bytes, None when unset; checked."""
+    env = os.environ.get("PINFLEX_MAX_MEMORY_GB")
+    if not env:
+        return None
+    try:
+        value = float(env)
+    except ValueError:
+        raise ConfigurationError(
+            f"PINFLEX_MAX_MEMORY_GB={env!r} is not a number of gigabytes"
+        ) from None
+    if not value > 0.0 or not math.isfinite(value):
+        raise ConfigurationError(f"PINFLEX_MAX_MEMORY_GB={env!r} must be positive")
+    return int(value * 2**30)
+
+
 def memory_limit_bytes() -> int:
     """The memory a single computation may use [bytes] (see the module docstring)."""
-    env = os.environ.get("PINFLEX_MAX_MEMORY_GB")
-    if env:
-        try:
-            value = float(env)
-        except ValueError:
-            raise ConfigurationError(
-                f"PINFLEX_MAX_MEMORY_GB={env!r} is not a number of gigabytes"
-            ) from None
-        if not value > 0.0 or not math.isfinite(value):
-            raise ConfigurationError(f"PINFLEX_MAX_MEMORY_GB={env!r} must be positive")
-        return int(value * 2**30)
+    env = _env_limit_bytes()
+    if env is not None:
+        return env
     try:
         with open("/proc/meminfo") as stream:
             for line in stream:
@@ -63,8 +78,15 @@ def _gb(nbytes: float) -> str:
 
 
 def check_memory(nbytes: float, what: str, fix: str) -> None:
-    """Raise :class:`ResourceLimitExceeded` if ``nbytes`` exceeds :func:`memory_limit_bytes`."""
-    limit = memory_limit_bytes()
+    """Raise :class:`ResourceLimitExceeded` if ``nbytes`` exceeds :func:`memory_limit_bytes`.
+
+    Without ``PINFLEX_MAX_MEMORY_GB``, requests of at most :data:`ALWAYS_ALLOWED_BYTES` pass
+    without reading the available memory.
+    """
+    env = _env_limit_bytes()
+    if env is None and nbytes <= ALWAYS_ALLOWED_BYTES:
+        return
+    limit = env if env is not None else memory_limit_bytes()
     if nbytes > limit:
         raise ResourceLimitExceeded(
             f"{what} would need about {_gb(nbytes)} of memory, more than the {_gb(limit)} "

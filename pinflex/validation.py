@@ -144,6 +144,6 @@ def require_array(value, name: str, *, error: type[PinflexError] = Configuration
         out = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
         raise error(f"{name} must be numbers, got {value!r}") from exc
-    if not np.all(np.isfinite(out)):
+    if not np.isfinite(out).all():
         raise error(f"{name} must be finite numbers (no NaN or inf), got {value!r}")
     return out

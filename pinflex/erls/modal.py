@@ -134,7 +134,12 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
         )
     _check_n_modes(n_modes)
     terms = model.pose_terms(Qb)
-    M = solve.mass(model, terms, y, Qb.shape[0])
+    layout = solve.one_pose_layout(model) if single and y.ndim == 1 else None
+    if layout is not None:  # one pose: one product S^T W S instead of the block assembly
+        twist = solve.root_twists(model, solve.solve_plan(model), terms, 1)
+        M = solve.mass_one(model, layout, terms, twist, y)[0][None]
+    else:
+        M = solve.mass(model, terms, y, Qb.shape[0])
 
     def pencil(i):  # nodal-coordinate pair of pose i, for high modes of extreme spectra
         Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)
@@ -220,16 +225,31 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
         raise ConfigurationError("modes() takes one pose; use frequencies() for many")
     y = model.check_y(y, bounds=check_bounds)
     _check_n_modes(n_modes)
-    terms = model.pose_terms(q[None])
+    terms, placements = model.pose_terms_and_placements(q)
     plan = solve.solve_plan(model)
     twist = solve.root_twists(model, plan, terms, 1)
-    M = solve.mass(model, terms, y, 1)[0]
+    layout = solve.one_pose_layout(model) if y.ndim == 1 else None
+    if layout is not None:
+        M, S = solve.mass_one(model, layout, terms, twist, y)
+    else:
+        M = solve.mass(model, terms, y, 1)[0]
 
     def pencil():
         Mx, Kx = model.matrices_from_terms(terms, y, 1)
         return (*reduced(model, Mx[0], Kx[0]), Mx[0])
 
     lam, sw, sx = solve.eigvecs(model, M, n_modes, pencil)
+    if not sx.shape[1]:  # every mode from the inverse form: fields straight from [w; q]
+        if layout is not None:
+            shapes, positions, motion, elastic = _layout_fields(model, layout, S, placements,
+                                                                sw)
+        else:
+            shapes, positions, motion, elastic = _solver_fields(model, plan, twist, terms,
+                                                                placements, sw)
+        return ModalResult(
+            q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
+            node_positions=positions, node_motion=motion, node_elastic=elastic,
+        )
     shapes = np.concatenate([solve.to_nodal(model, twist, sw), sx], axis=1)
     nx = model.nx
     k = lam.size
@@ -242,6 +262,76 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
         q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
     )
+
+
+def _layout_fields(model, layout, S: np.ndarray, placements, sw: np.ndarray):
+    """As :func:`_solver_fields`, for every beam at once through the one-pose layout.
+
+    ``Z = S sw`` holds each beam's own coordinates, root twist and frame twist per mode; the
+    node twists (beam axes) are ``A Z`` (``A_el Z`` without the frame motion, both in one
+    product ``A2 Z``), the nodal coordinates ``X Z``; each node's two 3-vectors are then
+    turned to world axes.
+    """
+    nx = model.nx
+    k = sw.shape[1]
+    Z = S @ sw
+    x = layout.X @ Z
+    sign = np.where(x[np.argmax(np.abs(x), axis=0), np.arange(k)] < 0, -1.0, 1.0)
+    shapes = np.empty_like(sw)
+    shapes[:nx] = x
+    shapes[nx:] = sw[nx:]
+    shapes *= sign
+    Z *= sign
+    R = np.stack([placements[link].rotation for link in layout.node_slices])[layout.node_links]
+    both = R @ (layout.A2 @ Z).reshape(-1, 3, k)  # total motion, then elastic, per 3-row block
+    half = both.shape[0] // 2
+    positions, motion, elastic = {}, {}, {}
+    for link, (a, b) in layout.node_slices.items():
+        positions[link] = placements[link].positions_m
+        motion[link] = both[a:b].reshape(-1, 6, k).transpose(2, 0, 1)
+        elastic[link] = both[half + a : half + b].reshape(-1, 6, k).transpose(2, 0, 1)
+    return shapes, positions, motion, elastic
+
+
+def _solver_fields(model, plan, twist, terms, placements, sw: np.ndarray):
+    """Nodal shapes and node fields of solver-coordinate shapes ``[w; q]`` (free joints).
+
+    The elastic node twists of a link (beam axes) are ``C w_link + R (e w)`` (``e`` the
+    solver-coordinate root twist), the link's nodal coordinates ``x`` are their kept rows: one
+    product per link gives both the shapes over ``[x; q]`` (as :func:`solve.to_nodal`) and
+    the nodal motion (as :func:`node_fields`). Signs as in :func:`modes`: largest elastic
+    component positive.
+
+    Returns:
+        ``(shapes, positions, motion, elastic)`` as :func:`modes` stores them.
+    """
+    nx = plan.nx
+    k = sw.shape[1]
+    shapes = np.empty_like(sw)
+    shapes[nx:] = sw[nx:]
+    w = sw[:nx]
+    el = {}
+    for link, c in plan.cores.items():
+        e = twist[link]
+        t = c.C @ w[c.start : c.stop]
+        if e is not None:
+            t += c.R @ (e[0] @ w)
+        shapes[c.start : c.stop] = t[c.x_rows]
+        el[link] = t
+    phix = shapes[:nx]
+    sign = np.where(phix[np.argmax(np.abs(phix), axis=0), np.arange(k)] < 0, -1.0, 1.0)
+    shapes *= sign
+    qs = shapes[nx:]
+    positions, motion, elastic = {}, {}, {}
+    for link, bp in model.plan.beams.items():
+        n1 = bp.nodes.shape[0]
+        RwT = rotate_twist(placements[link].rotation).T
+        t = el[link] * sign
+        tot = t + (bp.jac @ terms.jac[link][0]) @ qs
+        positions[link] = placements[link].positions_m
+        motion[link] = tot.T.reshape(k, n1, 6) @ RwT
+        elastic[link] = t.T.reshape(k, n1, 6) @ RwT
+    return shapes, positions, motion, elastic
 
 
 def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) -> ModalResult:

@@ -57,7 +57,7 @@ from pinflex.exceptions import (
     InvalidDescription,
     NoFlexibleLink,
 )
-from pinflex.linalg import axis_rotation, rotate_twist, translate_twist
+from pinflex.linalg import rotate_twist, skew, translate_twist
 from pinflex.resources import check_modal
 from pinflex.validation import require_array, require_count
 
@@ -324,12 +324,30 @@ class FlexibleModel:
         q = self.check_q(q)
         data = self.model.createData()
         pin.framesForwardKinematics(self.model, data, self.pin_configuration(q))
+        return self._placements(data)
+
+    def _placements(self, data) -> dict[str, NodePlacement]:
+        """Node placements from Pinocchio ``data`` whose frame placements are up to date."""
         out = {}
         for link, bp in self.plan.beams.items():
-            oMf = data.oMf[self.plan.frame_ids[link]]
-            out[link] = NodePlacement(bp.nodes @ oMf.rotation.T + oMf.translation,
-                                      oMf.rotation @ bp.spec.rotation)
+            H = data.oMf[self.plan.frame_ids[link]].homogeneous
+            R = H[:3, :3]
+            out[link] = NodePlacement(bp.nodes @ R.T + H[:3, 3], R @ bp.spec.rotation)
         return out
+
+    def pose_terms_and_placements(
+        self, q: np.ndarray
+    ) -> tuple[PoseTerms, dict[str, NodePlacement]]:
+        """:meth:`pose_terms` and :meth:`node_placements` of one checked pose (nv,).
+
+        One kinematics pass serves both (the frame placements follow from the joint placements
+        the Jacobians were computed with).
+        """
+        terms = self.pose_terms(q[None])
+        if not self.nv:
+            return terms, self.node_placements(q)
+        pin.updateFramePlacements(self.model, self.data)
+        return terms, self._placements(self.data)
 
     @property
     def design_names(self) -> tuple[str, ...]:
@@ -364,9 +382,7 @@ class FlexibleModel:
                 f"expected {self.nv} joint values ({', '.join(self.joint_names)}){extra} per "
                 f"pose, got an array of shape {q.shape}"
             )
-        if not np.all(np.isfinite(q)):
-            raise ConfigurationError("joint values must be finite")
-        return q
+        return q  # finite: require_array checked it
 
     def from_configuration(self, qpin) -> np.ndarray:
         """User coordinates (nv,) or (n, nv) of Pinocchio configuration vectors (nq,) or (n, nq).
@@ -442,6 +458,8 @@ class FlexibleModel:
     def pin_configuration(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio configuration vector (nq,) of user coordinates."""
         qv = self.pin_q(np.asarray(q, dtype=float))
+        if self.model.nq == self.nv:  # no continuous joint: the values in Pinocchio's order
+            return qv[self._pin_order] if self._pin_order is not None else qv
         out = np.zeros(self.model.nq)
         for j in range(1, self.model.njoints):
             jm = self.model.joints[j]
@@ -451,6 +469,21 @@ class FlexibleModel:
             else:
                 out[jm.idx_q] = v
         return out
+
+    @property
+    def _pin_order(self) -> np.ndarray | None:
+        """``idx_v`` per configuration slot when it is not the identity (nq = nv), else None."""
+        cached = self.__dict__.get("_pin_order_cache", False)
+        if cached is False:
+            order = np.zeros(self.model.nq, dtype=int)
+            for j in range(1, self.model.njoints):
+                jm = self.model.joints[j]
+                order[jm.idx_q : jm.idx_q + jm.nq] = np.arange(jm.idx_v, jm.idx_v + jm.nv)
+            cached = None if np.array_equal(order, np.arange(order.size)) else order
+            if cached is not None:
+                cached.setflags(write=False)
+            self.__dict__["_pin_order_cache"] = cached
+        return cached
 
     # ------------------------------------------------------------------ assembly
     def pose_terms(self, Q: np.ndarray) -> PoseTerms:
@@ -464,16 +497,44 @@ class FlexibleModel:
             pin.computeJointJacobians(model, data, qp)
             for link, fid in fids:
                 jac[link][i] = pin.getFrameJacobian(model, data, fid, pin.LOCAL).reshape(6, -1)
-        for link in jac:
-            jac[link] = jac[link] @ self.coord_map
+        names, cols, A0, A1, A2, plain = self._rodrigues
+        if not plain:
+            for link in jac:
+                jac[link] = jac[link] @ self.coord_map
         qrel = Q @ self.coord_map.T
         rot, slide = {}, {}
+        if names:  # R_o R(axis, angle) = R_o + sin R_o K + (1 - cos) R_o K^2, all joints at once
+            angle = qrel[:, cols][..., None, None]
+            R = A0 + np.sin(angle) * A1 + (1.0 - np.cos(angle)) * A2
+            for i, name in enumerate(names):
+                rot[name] = R[:, i]
         for j in self.plan.joints:
-            if j.kind == "revolute":
-                rot[j.name] = j.R_o @ axis_rotation(j.axis, qrel[:, j.user_col])
-            elif j.kind == "prismatic":
+            if j.kind == "prismatic":
                 slide[j.name] = (j.R_o @ j.axis)[None, :] * qrel[:, j.user_col, None]
         return PoseTerms(jac, rot, slide)
+
+    @property
+    def _rodrigues(self) -> tuple:
+        """Constants of :meth:`pose_terms`, computed once.
+
+        The revolute joints' names, user columns and ``R_o``, ``R_o K``, ``R_o K^2`` (K the
+        axis' cross-product matrix) stacked (nj, 3, 3), and whether the coordinate map is the
+        identity.
+        """
+        cached = self.__dict__.get("_rodrigues_cache")
+        if cached is None:
+            rev = [j for j in self.plan.joints if j.kind == "revolute"]
+            K = [skew(j.axis) for j in rev]
+            A0 = np.array([j.R_o for j in rev]).reshape(-1, 3, 3)
+            A1 = np.array([j.R_o @ k for j, k in zip(rev, K)]).reshape(-1, 3, 3)
+            A2 = np.array([j.R_o @ k @ k for j, k in zip(rev, K)]).reshape(-1, 3, 3)
+            for a in (A0, A1, A2):
+                a.setflags(write=False)
+            plain = bool(np.array_equal(self.coord_map, np.eye(self.nv)))
+            cached = (tuple(j.name for j in rev), np.array([j.user_col for j in rev], dtype=int),
+                      A0, A1, A2, plain)
+            self.__dict__["_rodrigues_cache"] = cached
+        return cached
 
     def assemble(self, terms: PoseTerms, alg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Assemble M without design masses, M per unit design mass, and K.

@@ -421,6 +421,157 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
     return (M, Md) if split else M
 
 
+#: Largest row count of the one-pose layout (:func:`mass_one`); larger models use :func:`mass`.
+ONE_POSE_MAX_ROWS = 400
+
+
+class OnePoseLayout:
+    """Row layout of the one-pose mass ``M = Sᵀ W S`` (built once per model, read-only).
+
+    Each mass carrier owns rows of ``S`` (its kinematic variables as rows over ``[w; q]``):
+    a beam its own coordinates (identity on its columns), its root twist (6) and its frame
+    twist (6, the Jacobian on the joint columns), weighted by the beam's constant
+    ``Aᵀ M_link A``; a rigid inertia its frame twist (6), weighted by the spatial inertia; a
+    point mass its velocity (3), weighted by its mass. ``S0`` holds the constant entries,
+    ``W0`` the constant weights (design masses are set per call).
+
+    For the mode shapes: ``A2 = [A; A_el]``, ``A`` mapping the rows of ``S`` to the node
+    twists of every beam (beam axes; ``[C, R, J_frame]`` of each beam, its nodes stacked in
+    plan order) and ``A_el`` its elastic part (without the frame-twist columns);
+    ``X = A_el[x rows]`` gives the nodal coordinates ``x``; ``node_links`` names the beam of
+    each 3-row block of ``A2``'s rows and ``node_slices`` the blocks of each beam in ``A``.
+    """
+
+    __slots__ = ("S0", "W0", "beams", "inertias", "masses", "design_diag", "design_cols",
+                 "A2", "X", "node_links", "node_slices")
+
+    def __init__(self, S0, W0, beams, inertias, masses, design_diag, design_cols, A2, X,
+                 node_links, node_slices):
+        self.S0, self.W0 = S0, W0
+        self.beams, self.inertias, self.masses = beams, inertias, masses
+        self.design_diag, self.design_cols = design_diag, design_cols
+        self.A2, self.X = A2, X
+        self.node_links, self.node_slices = node_links, node_slices
+
+
+def one_pose_layout(model) -> OnePoseLayout | None:
+    """The (cached) :class:`OnePoseLayout` of a model, or None when it is too large.
+
+    Above :data:`ONE_POSE_MAX_ROWS` rows a dense ``W`` would cost more than the structured
+    assembly of :func:`mass`.
+    """
+    if "_one_pose_layout" in model.__dict__:
+        return model.__dict__["_one_pose_layout"]
+    plan = solve_plan(model)
+    nx, nv = plan.nx, plan.nv
+    nd = nx + nv
+    n_rows = (sum(c.stop - c.start + 12 for c in plan.cores.values())
+              + 6 * len(model.plan.inertias) + 3 * len(model.plan.point_masses))
+    if n_rows > ONE_POSE_MAX_ROWS:
+        model.__dict__["_one_pose_layout"] = None
+        return None
+    S0 = np.zeros((n_rows, nd))
+    W0 = np.zeros((n_rows, n_rows))
+    n_node_rows = sum(c.C.shape[0] for c in plan.cores.values())
+    A = np.zeros((n_node_rows, n_rows))
+    A_el = np.zeros((n_node_rows, n_rows))
+    x_index = np.zeros(nx, dtype=int)
+    node_links: list[int] = []
+    node_slices: dict[str, tuple[int, int]] = {}
+    beams, inertias, masses = [], [], []
+    r = 0
+    t = 0
+    for link, c in plan.cores.items():
+        o = c.stop - c.start
+        S0[r : r + o, c.start : c.stop] = np.eye(o)
+        W0[r : r + o + 12, r : r + o + 12] = np.block([
+            [c.H_oo, c.H_oe, c.H_ov],
+            [c.H_oe.T, c.H_ee, c.H_ev],
+            [c.H_ov.T, c.H_ev.T, c.H_vv],
+        ])
+        beams.append((link, r + o, r + o + 6))  # root-twist rows, frame-twist rows
+        n_t = c.C.shape[0]
+        A_el[t : t + n_t, r : r + o] = c.C
+        A_el[t : t + n_t, r + o : r + o + 6] = c.R
+        A[t : t + n_t, r : r + o + 6] = A_el[t : t + n_t, r : r + o + 6]
+        A[t : t + n_t, r + o + 6 : r + o + 12] = model.plan.beams[link].jac
+        x_index[c.start : c.stop] = t + c.x_rows
+        node_links += [len(node_slices)] * (n_t // 3)
+        node_slices[link] = (t // 3, (t + n_t) // 3)
+        r += o + 12
+        t += n_t
+    for link, inertia in model.plan.inertias.items():
+        W0[r : r + 6, r : r + 6] = inertia
+        inertias.append((link, r))
+        r += 6
+    design_index = getattr(model, "_mass_design_index", None)
+    if design_index is None:
+        design_index = {d.name: i for i, d in enumerate(model.design)}
+    diag, cols = [], []
+    for pm, att in zip(model.plan.point_masses, plan.pm_attach):
+        if att.const is not None:
+            S0[r : r + 3, att.start : att.stop] = att.const[:3]
+        idx = np.arange(r, r + 3)
+        if pm.name in design_index:
+            diag.append(idx * (n_rows + 1))
+            cols.append(np.full(3, design_index[pm.name]))
+        else:
+            W0[idx, idx] = model.point_mass_values[pm.name]
+        masses.append((pm.link, r, att.lin[:3], translate_twist(pm.xyz)[:3]))
+        r += 3
+    X = A_el[x_index]
+    A2 = np.concatenate([A, A_el])
+    links = np.array(node_links + node_links, dtype=int)
+    for a in (S0, W0, A2, X, links):
+        a.setflags(write=False)
+    layout = OnePoseLayout(S0, W0, tuple(beams), tuple(inertias), tuple(masses),
+                           np.concatenate(diag) if diag else np.zeros(0, int),
+                           np.concatenate(cols) if cols else np.zeros(0, int),
+                           A2, X, links, node_slices)
+    model.__dict__["_one_pose_layout"] = layout
+    return layout
+
+
+def mass_one(model, layout: OnePoseLayout, terms, twist: dict, y: np.ndarray):
+    """Mass matrix (nd, nd) of one pose in solver coordinates, as :func:`mass` (b = 1).
+
+    Returns:
+        ``(M, S)``: the mass and the pose's rows ``S`` (n_rows, nd) of :class:`OnePoseLayout`.
+
+    Args:
+        model: The flexible model.
+        layout: Its :func:`one_pose_layout`.
+        terms: Pose terms of the pose (leading axis 1).
+        twist: Its solver-coordinate root twists (:func:`root_twists`, b = 1).
+        y: Checked design values (ny,).
+    """
+    nx = model.nx
+    S = layout.S0.copy()
+    jac = terms.jac
+    for link, re, rj in layout.beams:
+        e = twist[link]
+        if e is not None:
+            S[re : re + 6, :nx] = e[0]
+        S[rj : rj + 6, nx:] = jac[link][0]
+    for link, r in layout.inertias:
+        e = twist[link]
+        if e is not None:
+            S[r : r + 6, :nx] = e[0]
+        S[r : r + 6, nx:] = jac[link][0]
+    for link, r, lin, to_point in layout.masses:
+        e = twist[link]
+        if e is not None:
+            S[r : r + 3, :nx] += lin @ e[0]
+        S[r : r + 3, nx:] = to_point @ jac[link][0]
+    if layout.design_diag.size:
+        W = layout.W0.copy()
+        W.flat[layout.design_diag] = y[layout.design_cols]
+    else:
+        W = layout.W0
+    M = S.T @ (W @ S)
+    return 0.5 * (M + M.T), S
+
+
 def condense(model, M: np.ndarray):
     """Elastic mass with the rigid joint coordinates condensed out, and the solve pieces.
 
@@ -582,28 +733,48 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
         rigid-coordinate response.
     """
     import scipy.linalg
+    from scipy.linalg import lapack
 
     nx = model.nx
     k = nx if n_modes is None else min(int(n_modes), nx)
-    Bred, Lq, Y = condense(model, M)
     nd = M.shape[-1]
+    # condense as condense() does, through LAPACK directly (one pose: the wrappers' checks
+    # cost more than these small factorizations)
+    Lq = Y = None
+    Bred = M[:nx, :nx]
+    if model.nv:
+        Lq, info = lapack.dpotrf(M[nx:, nx:], lower=1, clean=1)
+        if info != 0:
+            raise EigenSolverError(
+                "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
+                "add inertia to the links it drives"
+            )
+        Y, info = lapack.dtrtrs(Lq, M[nx:, :nx], lower=1)
+        Bred = Bred - Y.T @ Y
     if k == 0:
         return np.zeros(0), np.zeros((nd, 0)), np.zeros((nd, 0))
     if use_lanczos(nx, k):
         mu, V = _lanczos(Bred, k, True)
     elif k == nx:
-        mu, V = np.linalg.eigh(Bred)
+        mu, V, info = lapack.dsyevd(Bred, compute_v=1, lower=1)
+        if info != 0:
+            raise EigenSolverError("the symmetric eigensolver did not converge: the mass of the "
+                                   "model is not finite")
     else:
         mu, V = scipy.linalg.eigh(Bred, subset_by_index=[nx - k, nx - 1], driver="evr",
                                   check_finite=False)
     mu, V = mu[::-1], V[:, ::-1]
-    _finite(mu)
-    r = resolved(mu)  # the rounding level needs the largest μ only: mu[0]
-    phi_w = V[:, :r] / np.sqrt(mu[:r])[None, :]
-    shapes_w = np.zeros((nd, r))
+    if not np.isfinite(mu).all():
+        _finite(mu)
+    ok = mu > 64.0 * _EPS * max(abs(mu[0]), abs(mu[-1]))  # as resolved(): mu is sorted
+    r = k if ok.all() else int(np.argmin(ok))
+    phi_w = V[:, :r] / np.sqrt(mu[:r])
+    shapes_w = np.empty((nd, r))
     shapes_w[:nx] = phi_w
     if Lq is not None:
-        shapes_w[nx:] = -np.linalg.solve(np.swapaxes(Lq, -1, -2), Y @ phi_w)  # nv is small
+        shapes_w[nx:] = -lapack.dtrtrs(Lq, Y @ phi_w, lower=1, trans=1)[0]  # nv is small
+    else:
+        shapes_w[nx:] = 0.0
     lam = 1.0 / mu
     shapes_x = np.zeros((nd, k - r))
     if r < k:
