@@ -26,6 +26,7 @@ vs 2.69 % over y ∈ [0, 0.25]², ``benchmarks/bench_taylor.py``); ``quantity="e
 
 from __future__ import annotations
 
+import itertools
 import time
 import warnings
 from collections.abc import Sequence
@@ -173,6 +174,7 @@ def build_assignment(
     floors: Sequence[tuple[int, float]] = (),
     bands: Sequence[tuple[int, float, float]] = (),
     taylor: TaylorModel | None = None,
+    taylor_tol: float | None = None,
 ) -> tuple[AssignmentQP, TaylorModel]:
     """Build the assignment QP of ``targets`` along ``trajectory`` (not solved).
 
@@ -195,6 +197,11 @@ def build_assignment(
         bands: ``(mode, a_hz, b_hz)``: forbidden band of a mode (see
             :func:`pinflex.assignment.problem.build_assignment_qp`).
         taylor: Reuse this Taylor model instead of expanding.
+        taylor_tol: Pick the Taylor order (1–8, ``order`` is then ignored): the lowest whose
+            next-order estimate of the relative error of ``quantity`` meets it along the
+            trajectory at ``y0`` and at the corners of the design box
+            (:func:`pinflex.parametric.fidelity.order_for_tolerance`); the model's
+            ``order_choice`` reports it.
 
     Returns:
         ``(problem, taylor_model)``; the QP's variables are ``δy = y − y0`` of ``design``.
@@ -214,7 +221,11 @@ def build_assignment(
     for m in [t.mode for t in targets] + [f[0] for f in floors] + [b[0] for b in bands]:
         if m not in modes:
             modes.append(int(m))
-    if taylor is None:
+    if taylor is None and taylor_tol is not None:
+        over = design_region(model, Q, y0, design)
+        taylor = expand(model, q0, y0, order=8, modes=modes, design=design, tol=taylor_tol,
+                        over=over)
+    elif taylor is None:
         taylor = expand(model, q0, y0, order=order, modes=modes, design=design)
     else:
         missing = set(modes) - set(taylor.modes)
@@ -273,6 +284,33 @@ def build_assignment(
         names=[model.design[j].name for j in didx],
     )
     return problem, taylor
+
+
+def design_region(model: FlexibleModel, Q: np.ndarray, y0: np.ndarray,
+                  design: Sequence[str] | None) -> tuple[np.ndarray, np.ndarray]:
+    """Samples ``(Q, Y)`` where an assignment's Taylor model is used.
+
+    The trajectory at ``y0`` and at every corner of the box of the chosen design variables
+    (≤ 6 of them; at each bound along each axis otherwise); infinite bounds are left out.
+    """
+    names = model.design_names if design is None else tuple(design)
+    didx = [model.design_names.index(n) for n in names]
+    designs = [np.asarray(y0, dtype=float)]
+    bounds = [[b for b in (model.design[j].lower, model.design[j].upper) if np.isfinite(b)]
+              for j in didx]
+    if len(didx) <= 6:
+        for corner in itertools.product(*bounds):
+            y = designs[0].copy()
+            y[didx] = corner
+            designs.append(y)
+    else:
+        for j, bj in zip(didx, bounds):
+            for b in bj:
+                y = designs[0].copy()
+                y[j] = b
+                designs.append(y)
+    ns = Q.shape[0]
+    return np.tile(Q, (len(designs), 1)), np.repeat(np.array(designs), ns, axis=0)
 
 
 def exact_errors(model: FlexibleModel, Q: np.ndarray, y: np.ndarray,

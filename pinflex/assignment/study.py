@@ -102,6 +102,7 @@ class AssignmentConfig:
     folder: Path = Path(".")
     joints: str = "free"
     values: dict | None = None
+    taylor_tol: float | None = None
 
     def build_model(self) -> FlexibleModel:
         """The flexible model of the study."""
@@ -247,6 +248,6 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
         report_modes=[m for m in cfg.report_modes if m <= model.n_elastic],
         q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
         order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,
-        floors=cfg.floors, bands=cfg.bands,
+        floors=cfg.floors, bands=cfg.bands, taylor_tol=cfg.taylor_tol,
     )
     return model, traj, result

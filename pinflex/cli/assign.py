@@ -25,6 +25,10 @@ def add_parser(sub) -> None:
     p.add_argument("--parquet", default=None, metavar="FILE",
                    help="the same table as Parquet (needs pyarrow)")
     p.add_argument("--html", default=None, metavar="FILE", help="write an HTML preview")
+    p.add_argument("--tol", type=float, default=None, metavar="TOL",
+                   help="pick the Taylor order (1-8) instead of the study's: the lowest whose "
+                   "next-order estimate of the relative frequency error along the trajectory "
+                   "(at y0 and the design-box corners) meets TOL; reported with its estimate")
     add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_assign)
 
@@ -49,7 +53,18 @@ def summary(result, total_s: float) -> dict:
         "timings_s": result.timings_s,
         "total_time_s": total_s,
         "joints": dict(result.joints),
+        "taylor_order": int(result.taylor.order),
+        "taylor_order_choice": _order_choice(result.taylor),
     }
+
+
+def _order_choice(tm) -> dict | None:
+    """The ``--tol`` order choice as plain JSON (None when the order was given)."""
+    c = tm.order_choice
+    if c is None:
+        return None
+    return {"tol": c["tol"], "order": c["order"], "estimate": c["estimate"],
+            "estimates": {str(k): v for k, v in c["estimates"].items()}, "method": c["method"]}
 
 
 def write_preview(model, traj, result, path) -> str | None:
@@ -80,6 +95,12 @@ def cmd_assign(args: argparse.Namespace) -> int:
         cfg.joints = args.joints
     if args.set:
         cfg.values = {**(cfg.values or {}), **parse_values(args.set)}
+    if args.tol is not None:
+        if not args.tol > 0:
+            from pinflex.exceptions import ConfigurationError
+
+            raise ConfigurationError(f"--tol {args.tol}: give a positive relative tolerance")
+        cfg.taylor_tol = args.tol
     import sys
 
     model, traj, result = run_config(cfg, progress=not args.no_progress and sys.stderr.isatty())
@@ -105,6 +126,10 @@ def cmd_assign(args: argparse.Namespace) -> int:
         return 0
     print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
     print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
+    choice = result.taylor.order_choice
+    if choice is not None:
+        print(f"Taylor order {choice['order']} for --tol {choice['tol']:g} (next-order estimate "
+              f"{choice['estimate']:.3g} along the trajectory and design-box corners)")
     print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
           f"{100 * result.max_error_after:.2f} % "
           f"(predicted {100 * result.predicted_max_error_after:.2f} %)"

@@ -49,6 +49,8 @@ class TaylorModel:
         freq_jets: Jets of the frequencies [Hz] (derived from ``eigval_jets`` by default).
         joints: The model's joint conditions ``{joint: 'free' | 'locked' | 'k=...'}``; the
             mode numbers count the non-rigid modes under these conditions.
+        order_choice: How the order was picked when :func:`expand` got a ``tol``:
+            ``{"tol", "order", "estimate", "estimates", "method"}`` (None otherwise).
         coefficient_matrices: ``{(quantity, linear_in_design): (ncoef, k)}`` coefficients of
             the four polynomials :meth:`evaluate` uses (derived).
         degree_blocks: ``{quantity: (ncoef, k·(p+1) + k)}``: per mode one column per degree
@@ -72,6 +74,7 @@ class TaylorModel:
     spectrum: np.ndarray | None = None
     spectrum_slopes: np.ndarray | None = None
     joints: dict[str, str] | None = None
+    order_choice: Mapping[str, object] | None = None
     coefficient_matrices: Mapping[tuple[str, bool], np.ndarray] = field(
         init=False, repr=False, compare=False)
     degree_blocks: Mapping[str, np.ndarray] = field(init=False, repr=False, compare=False)
@@ -463,8 +466,8 @@ class _EvaluationPlan:
 
 
 def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence[int] = (1,),
-           joints: Sequence[str] | None = None, design: Sequence[str] | None = None
-           ) -> TaylorModel:
+           joints: Sequence[str] | None = None, design: Sequence[str] | None = None,
+           tol: float | None = None, over=None) -> TaylorModel:
     """Build the Taylor model of the given non-rigid modes at ``(q0, y0)``.
 
     The eigenvalues ``λ_i(q, y) = ω_i²`` of ``K φ = λ M φ`` are expanded to order ``p`` in the
@@ -479,6 +482,12 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         modes: Non-rigid mode numbers to expand, 1 = lowest (default: mode 1).
         joints: Names of the joints to expand (default: all moving joints).
         design: Names of the design variables to expand (default: all).
+        tol: Pick the order instead: the lowest order up to ``order`` (at least 1) whose
+            next-order estimate of the relative frequency error over ``over`` meets ``tol``
+            (:func:`pinflex.parametric.fidelity.order_for_tolerance`); the choice and its
+            estimate are in ``order_choice``.
+        over: With ``tol``: the samples where the model will be used, joint values (n, nv)
+            or ``(Q, Y)`` with design values (n, ny) or (ny,).
 
     Returns:
         A read-only :class:`TaylorModel`: jets of λ [rad²/s²] and of f [Hz], shape (ncoef, k)
@@ -488,6 +497,8 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         ConfigurationError: Modes outside 1..n_elastic, unknown names, a bad order or pose.
         RepeatedEigenvalue: a requested mode is (nearly) repeated at the expansion point.
     """
+    if tol is not None:
+        return _expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over)
     if model.n_elastic == 0:
         model.check_n_modes(None)  # raises NoFlexibleLink, naming the robot
     raw = [modes] if isinstance(modes, int | np.integer | str) else list(np.ravel(modes))
@@ -549,6 +560,27 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         spectrum_slopes=slopes,
         joints=model.joint_labels(),
     )
+
+
+def _expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over):
+    """:func:`expand` with ``tol``: the order from next-order estimates over ``over``."""
+    import dataclasses
+
+    from pinflex.parametric.fidelity import order_for_tolerance
+
+    if over is None:
+        raise ConfigurationError("expand(tol=...) needs over=Q (or (Q, Y)): the samples where "
+                                 "the model will be used")
+    Q, Y = over if isinstance(over, tuple) else (over, None)
+    cap = max(1, int(order)) if order is not None else 8
+    choice = order_for_tolerance(model, q0, y0, Q=Q, Y=Y, tol=tol, modes=modes,
+                                 orders=range(1, cap + 1), joints=joints, design=design)
+    info = MappingProxyType({"tol": choice.tol, "order": choice.order,
+                             "estimate": choice.estimate,
+                             "estimates": MappingProxyType(dict(choice.estimates)),
+                             "method": "next-order estimate |T_(p+1) - T_p| / |T_(p+1)|, "
+                                       "frequency [Hz], max over samples and modes"})
+    return dataclasses.replace(choice.model, order_choice=info)
 
 
 def spectral_weights(modes: Sequence[int], spectrum: np.ndarray | None,

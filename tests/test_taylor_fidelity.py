@@ -1,0 +1,114 @@
+"""The Taylor order picked for a tolerance: its next-order estimate against the exact model.
+
+The converged value of a Taylor series is the function it expands: the exact frequencies of
+the same model at the same samples (pinflex's exact modal solve, 1e-11 against the
+independent FE of benchmark A in ``test_reference_fe``).
+"""
+
+import json
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import UR5
+
+from pinflex.assignment.benchmark_a import benchmark_model, benchmark_trajectory
+from pinflex.description import load
+from pinflex.erls import FlexibleModel
+from pinflex.erls.fidelity import refined
+from pinflex.exceptions import ConfigurationError
+from pinflex.parametric import expand
+from pinflex.parametric.fidelity import next_order_estimates, order_for_tolerance
+
+ROOT = Path(__file__).resolve().parents[1]
+Q0 = np.array([1.817, 5.312])
+
+
+def _actual(model, tm, Q, modes):
+    exact = model.frequencies(Q, n_modes=max(modes))[:, [m - 1 for m in modes]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return float(np.max(np.abs(tm.evaluate(Q, quantity="freq_hz", warn=False) / exact - 1)))
+
+
+@pytest.fixture(scope="module")
+def arm():
+    """Benchmark A as shipped (two_link.urdf, planar, absolute angles)."""
+    return benchmark_model()
+
+
+@pytest.mark.parametrize("tol", [3e-3, 5e-4])
+def test_benchmark_a_order_meets_tolerance_along_its_trajectory(arm, tol):
+    """Modes 1-3 along benchmark A's trajectory: the chosen order is cheapest and honest.
+
+    The estimate is within 4x of the actual error, the chosen order is within 2 tol, and
+    the order below it is off by more than tol / 2 (the estimate is cautious: that order can
+    meet tol itself, so no more than one order is spent on caution here).
+    """
+    Q = benchmark_trajectory(arm).q
+    modes = (1, 2, 3)
+    choice = order_for_tolerance(arm, Q0, Q=Q, tol=tol, modes=modes, design=[])
+    assert choice.estimate <= tol < min(choice.estimates[p] for p in range(1, choice.order))
+    actual = _actual(arm, choice.model, Q, modes)
+    assert actual <= 2 * tol
+    assert 0.25 < choice.estimate / actual < 4
+    lower = expand(arm, Q0, order=choice.order - 1, modes=modes, design=[])
+    assert _actual(arm, lower, Q, modes) > tol / 2
+
+
+def test_fine_ur5_order_estimate_matches_the_exact_error():
+    """A fine UR5: the estimate of the chosen order is within 1.5x of the actual error.
+
+    UR5 with 4x the shipped elements per tube (294 dof), three joints within ±0.1 rad,
+    tol 1e-3; the order below the chosen one misses the tolerance.
+    """
+    fine = FlexibleModel(refined(load(UR5), 4))
+    q = np.array([0.0, -1.0, 1.2, 0.3, 0.5, 0.0])
+    Q = np.repeat(q[None], 24, axis=0)
+    Q[:, 1:4] += 0.1 * np.random.default_rng(1).uniform(-1, 1, size=(24, 3))
+    joints = ["shoulder_lift_joint", "elbow_joint", "wrist_1_joint"]
+    modes = (1, 2, 3)
+    choice = order_for_tolerance(fine, q, Q=Q, tol=1e-3, modes=modes, joints=joints, design=[])
+    actual = _actual(fine, choice.model, Q, modes)
+    assert choice.estimate <= 1e-3 and actual <= 1e-3
+    assert 1 / 1.5 < choice.estimate / actual < 1.5
+    lower = expand(fine, q, order=choice.order - 1, modes=modes, joints=joints, design=[])
+    assert _actual(fine, lower, Q, modes) > 1e-3
+
+
+def test_estimates_of_one_expansion_equal_those_of_the_lower_orders(arm):
+    """e_p from an order-5 expansion equals e_p from an order-(p+1) expansion."""
+    Q = Q0 + np.array([[0.3, -0.2], [-0.4, 0.5], [0.1, 0.1]])
+    high = next_order_estimates(expand(arm, Q0, order=5, modes=(1, 2), design=[]), Q)
+    for p in range(1, 5):
+        low = next_order_estimates(expand(arm, Q0, order=p + 1, modes=(1, 2), design=[]), Q)
+        np.testing.assert_allclose(low[p], high[p], rtol=1e-9, atol=1e-15)
+
+
+def test_expand_tol_reports_the_choice_and_refuses_without_samples(arm):
+    """expand(tol=, over=) returns the chosen model with its order choice; errors are named."""
+    Q = Q0 + np.array([[0.1, -0.1], [-0.1, 0.1]])
+    tm = expand(arm, Q0, order=8, design=[], tol=1e-3, over=Q)
+    assert tm.order == tm.order_choice["order"] and tm.order_choice["estimate"] <= 1e-3
+    with pytest.raises(ConfigurationError, match="over"):
+        expand(arm, Q0, design=[], tol=1e-4)
+    with pytest.raises(ConfigurationError, match="no Taylor order"):
+        order_for_tolerance(arm, Q0, Q=Q0 + np.array([[2.5, -2.5]]), tol=1e-9, design=[],
+                            orders=range(1, 4))
+    with pytest.raises(ConfigurationError, match="positive"):
+        order_for_tolerance(arm, Q0, Q=Q, tol=-1.0, design=[])
+
+
+def test_cli_assign_tol_reports_order_and_estimate(tmp_path):
+    """`pinflex assign --tol` picks the order, reports it and its estimate (JSON)."""
+    out = subprocess.run(
+        [sys.executable, "-m", "pinflex", "assign", str(ROOT / "examples" / "benchmark_a.toml"),
+         "--tol", "1e-3", "--json", "--no-progress"],
+        capture_output=True, text=True, check=True, cwd=tmp_path)
+    data = json.loads(out.stdout)
+    choice = data["taylor_order_choice"]
+    assert data["taylor_order"] == choice["order"]
+    assert choice["estimate"] <= 1e-3 < choice["estimates"][str(choice["order"] - 1)]
