@@ -354,8 +354,8 @@ def section_classic(seed: int, starts: int, quick: bool) -> None:
             table.append({"beam": label, "model": name, "mode1": float(mode1),
                           "eigen": ev.eigen_error, "defl": ev.deflection_error,
                           "eq19": ev.deflection_error_position})
-    print("   Kimball-Tsai 2R: its parameters were not available to us; the fitted 2R row "
-          "stands in for a 2R model")
+    print("   no published 2R: neither Kimball-Tsai's (2002) nor Yu-Feng-Xu's (2012) 2R "
+          "parameters were available to us; the 2R row is pinflex's own fitted 2R")
     RESULTS["classic"] = table
 
 

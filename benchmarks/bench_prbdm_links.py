@@ -3,12 +3,13 @@
 For each beam (paper 001's uniform beam and a random planform), nR chains with n = k..N are
 fitted (combined objective, the k lowest modes judged, loads alpha = 0.5 1 2 5); each chain's
 error is its combined loss against the converged beam truth (the estimator of
-``pinflex.prbdm.fidelity.links_for_tolerance``), and its evaluation time is one call of the
-k frequencies at the straight pose (Pinocchio CRBA + eigh) plus the tip statics at the four
-loads (batched planar Newton, four load steps, from rest), measured in interleaved rounds in
-one process, in CPU time (single-thread BLAS; the machine may be loaded, the output says how
-much). The chart goes to ``--out`` (default ``prbdm_links.png``); the tolerances
-listed are resolved from the same levels.
+``pinflex.prbdm.fidelity.links_for_tolerance``), and its evaluation times are one call of the
+chain's frequencies at the straight pose (Pinocchio CRBA + eigh; the chart's x axis) and,
+beside it, the tip statics at the four loads (batched planar Newton, four load steps, from
+rest), measured in interleaved rounds in one process, in CPU time (single-thread BLAS; the
+machine may be loaded, the output says how much). The chart goes to ``--out`` (default
+``prbdm_links.png``); the tolerances listed are resolved from the same levels, and each fit's
+CPU time is printed (the cost that does grow with n).
 
 Run: ``python benchmarks/bench_prbdm_links.py [--quick] [--json FILE] [--out FILE]``.
 """
@@ -19,6 +20,7 @@ import argparse
 import json
 import os
 import sys
+import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -42,17 +44,24 @@ def study(label, beam, n_modes, max_links, starts, rounds):
     """Levels n = k..max_links of one beam: errors, evaluation times, tolerance choices."""
     truth = compute_truth(beam, n_modes)
     # The fits links_for_tolerance makes (same objective, modes, starts and seed).
-    fits = {n: fit_prbdm(beam, n, n_modes, "combined", n_starts=starts, truth=truth)
-            for n in range(n_modes, max_links + 1)}
+    fits, fit_cpu = {}, {}
+    for n in range(n_modes, max_links + 1):
+        c0 = time.process_time()
+        fits[n] = fit_prbdm(beam, n, n_modes, "combined", n_starts=starts, truth=truth)
+        fit_cpu[n] = time.process_time() - c0
     chains = {n: f.chain(beam) for n, f in fits.items()}
     datas = {n: c.model.createData() for n, c in chains.items()}
 
-    def evaluation(n):
+    def frequencies(n):
+        def run():
+            chain_frequencies(chains[n], None, datas[n])
+        return run
+
+    def statics(n):
         chain = chains[n]
         ell, zeros = chain.link_lengths_m[1:], np.zeros((truth.forces_n.shape[0], n))
 
         def run():
-            chain_frequencies(chain, None, datas[n])
             planar_statics(chain.stiffness_nm_rad, ell, truth.forces_n, zeros, 4)
         return run
 
@@ -64,14 +73,16 @@ def study(label, beam, n_modes, max_links, starts, rounds):
         ref = np.array([solve_tip_statics(chain, f, load_steps=4).theta for f in truth.forces_n])
         assert ok.all() and np.max(np.abs(theta - ref)) < 1e-8
 
-    times = _interleaved_cpu({n: evaluation(n) for n in fits}, rounds=rounds, number=20)
+    sides = {("f", n): frequencies(n) for n in fits} | {("s", n): statics(n) for n in fits}
+    times = _interleaved_cpu(sides, rounds=rounds, number=200)
     rows = []
     for n, fit in fits.items():
-        t = times[n]
+        t, ts = times[("f", n)], times[("s", n)]
         rows.append({"n": n, "error": fit.combined_error, "eigen": fit.eigen_error,
                      "deflection": fit.deflection_error, "time_s": float(np.median(t)),
                      "time_min_s": float(t.min()), "time_max_s": float(t.max()),
-                     "evaluations": fit.n_evaluations})
+                     "statics_s": float(np.median(ts)), "fit_evaluations": fit.n_evaluations,
+                     "fit_cpu_s": fit_cpu[n]})
     picks = {}
     for tol in TOLERANCES:
         ok = [r for r in rows if r["error"] <= tol]
@@ -83,11 +94,13 @@ def study(label, beam, n_modes, max_links, starts, rounds):
                                    n_starts=starts, truth=truth).n_joints == picks[middle]
     print(f"== {label}: k = {n_modes} modes judged, {starts} starts, {rounds} interleaved "
           f"rounds ({_load()}; {blas_threads()})")
-    print("   n   error (combined)   eigen       deflection   evaluation [us] median (range)")
+    print("   n   error (combined)   eigen       deflection   frequencies [us] median (range)"
+          "   statics, 4 loads from rest [us]   fit [CPU s]")
     for r in rows:
         print(f"   {r['n']}R  {r['error']:.3e}          {r['eigen']:.3e}   "
-              f"{r['deflection']:.3e}    {1e6 * r['time_s']:8.1f} ({1e6 * r['time_min_s']:.1f}-"
-              f"{1e6 * r['time_max_s']:.1f})")
+              f"{r['deflection']:.3e}    {1e6 * r['time_s']:7.1f} ({1e6 * r['time_min_s']:.1f}-"
+              f"{1e6 * r['time_max_s']:.1f})       {1e6 * r['statics_s']:8.1f}"
+              f"                    {r['fit_cpu_s']:.2f}")
     print("   tol -> n: " + ", ".join(f"{tol:g} -> {f'{n}R' if n else 'none up to the largest'}"
                                       for tol, n in picks.items()))
     return {"beam": label, "n_modes": n_modes, "rows": rows,
@@ -96,8 +109,6 @@ def study(label, beam, n_modes, max_links, starts, rounds):
 
 def _interleaved_cpu(sides: dict, rounds: int, number: int) -> dict:
     """Like ``interleave.interleaved`` but in CPU time of this process (robust to load)."""
-    import time
-
     out: dict = {n: [] for n in sides}
     for fn in sides.values():
         fn()
@@ -132,7 +143,7 @@ def chart(results, out):
             ax.annotate(f"{r['n']}R", (ti, ei), fontsize=7)
     for tol in TOLERANCES:
         ax.axhline(tol, color="gray", ls=":", lw=0.8)
-    ax.set_xlabel("evaluation: frequencies + tip statics at 4 loads from rest [us]")
+    ax.set_xlabel("one evaluation of the chain's frequencies (CRBA + eigh) [us]")
     ax.set_ylabel("combined error against the converged beam truth [-]")
     ax.set_title("PRBDM link count: speed against accuracy")
     ax.legend(fontsize=7)

@@ -342,7 +342,7 @@ def compliance_between(planform: Planform, bounds_m: np.ndarray) -> np.ndarray:
     else:
         i_left, i_right = planform.area_moment_m4(left), planform.area_moment_m4(s_m)
     inv = planform._cumulative_integrals[piece, 4] + span * _log_mean_inverse(i_left, i_right)
-    return np.diff(inv) / planform.material.youngs_modulus_pa
+    return (inv[1:] - inv[:-1]) / planform.material.youngs_modulus_pa
 
 
 def chain_segments(planform: Planform, bounds_m: np.ndarray) -> list[SegmentProperties]:
@@ -385,7 +385,8 @@ def segment_arrays(planform: Planform, bounds_m: np.ndarray) -> tuple[np.ndarray
         (mass, com, ixx, iyy, izz, mean_area_moment, compliance), each shape (k,).
     """
     bounds = np.asarray(bounds_m, dtype=float)
-    m0, m1, m2, w3, inv_i = np.diff(_partial_integrals(planform, bounds), axis=0).T
+    cumulative = _partial_integrals(planform, bounds)
+    m0, m1, m2, w3, inv_i = (cumulative[1:] - cumulative[:-1]).T
     t = planform.thickness_m
     rho_t = planform.material.density_kg_m3 * t
     mass = rho_t * m0
@@ -394,7 +395,7 @@ def segment_arrays(planform: Planform, bounds_m: np.ndarray) -> tuple[np.ndarray
     ixx = rho_t * (w3 + t**2 * m0) / 12.0
     iyy = bending + mass * t**2 / 12.0
     izz = bending + rho_t * w3 / 12.0
-    mean_i = m0 * t**3 / 12.0 / np.diff(bounds)
+    mean_i = m0 * t**3 / 12.0 / (bounds[1:] - bounds[:-1])
     comp = inv_i / planform.material.youngs_modulus_pa
     return mass, com, ixx, iyy, izz, mean_i, comp
 

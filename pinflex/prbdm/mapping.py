@@ -271,9 +271,9 @@ def start_points(problem: MappingProblem, n_starts: int, seed: int) -> np.ndarra
 
 
 #: Tolerance of the eigen-only searches that only seed a combined search: they stop on the
-#: frequency-matching manifold at 1e-8 instead of round-off (fewer evaluations; the combined
+#: frequency-matching manifold at 1e-6 instead of round-off (fewer evaluations; the combined
 #: search then leaves the manifold anyway, and its optimum is the same).
-SEED_TOL = 1e-8
+SEED_TOL = 1e-6
 
 
 def _local(problem: MappingProblem, kind: str, x0: np.ndarray, weight: float | None = None,

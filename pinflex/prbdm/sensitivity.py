@@ -169,7 +169,7 @@ def link_moments(planform: Planform, s: np.ndarray, links: tuple):
     dmu[1, idx, idx] = -mu[0]
     dmu[2, idx, idx] = -rho_a[:n] * t2[:n] - 2.0 * mu[1]
     # End of link j (the start of link j + 1) moves: the integrand joins at arm b - a.
-    arm_end = np.diff(ends)[: n - 1]
+    arm_end = (ends[1:] - ends[:-1])[: n - 1]
     rho_end = rho_a[1:n]
     dmu[0, idx[:-1], idx[1:]] = rho_end
     dmu[1, idx[:-1], idx[1:]] = rho_end * arm_end
@@ -205,6 +205,20 @@ def mass_structure(lengths: np.ndarray, mu: np.ndarray, dmu: np.ndarray):
     dg[idx, idx] = (2.0 * lengths * outboard)[:, None] * dl + (lengths**2)[:, None] * d_out \
         + dmu[2]
     return g, dg
+
+
+def _mass_g(lengths: np.ndarray, links: tuple, s: np.ndarray) -> np.ndarray:
+    """G of :func:`mass_structure` alone (no derivatives), from the links' properties."""
+    ix = _indices(lengths.size)
+    mass, com, _, iyy = links[:4]
+    arm = com - s
+    m1 = mass * arm
+    outboard = np.zeros(lengths.size)
+    outboard[:-1] = np.cumsum(mass[:0:-1])[::-1]        # T_b = sum_{j>b} m_j
+    h = lengths * outboard + m1
+    g = lengths[ix.lower] * h[ix.upper]
+    g[ix.idx, ix.idx] = lengths**2 * outboard + iyy + mass * arm**2
+    return g
 
 
 def pose_mass_matrix(g: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -248,8 +262,12 @@ def _indices(n: int) -> _Indices:
 
 
 def reference_stiffness_and_derivative(problem: MappingProblem, s: np.ndarray,
-                                       lengths: np.ndarray, links: tuple):
-    """Uncorrected stiffness (n,) and its derivative with respect to s, shape (n, n)."""
+                                       lengths: np.ndarray, links: tuple,
+                                       derivative: bool = True):
+    """Uncorrected stiffness (n,) and its derivative with respect to s, shape (n, n).
+
+    With ``derivative=False`` the derivative is None (not computed).
+    """
     planform = problem.planform
     n = s.size
     length = planform.length_m
@@ -258,14 +276,18 @@ def reference_stiffness_and_derivative(problem: MappingProblem, s: np.ndarray,
     if problem.stiffness_law == "segment":
         bounds = np.concatenate([[0.0], 0.5 * (ends[:-1] + ends[1:])[: n - 1], [length]])
         k = 1.0 / compliance_between(planform, bounds)
+        if not derivative:
+            return k, None
         inv_ei = 1.0 / (e * planform.area_moment_m4(bounds))
         db = _indices(n).db
         # The root and the tip bounds are fixed.
         dcomp = inv_ei[1:, None] * db[1:] - inv_ei[:-1, None] * db[:-1]
         return k, -(k**2)[:, None] * dcomp
-    ell = np.diff(ends)
+    ell = ends[1:] - ends[:-1]
     mass, mean_i = links[0], links[5]
     k = np.sqrt(e * mean_i / mass)
+    if not derivative:
+        return k, None
     i_end = planform.area_moment_m4(ends)
     rho_a = planform.material.density_kg_m3 * planform.area_m2(ends)
     # Link j spans ends[j] .. ends[j + 1] (ends[n] = L fixed); moving an end by +1 changes
@@ -352,19 +374,19 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
     factors = np.exp(x[n1:])
     length = problem.planform.length_m
     s, lengths, links = workspace.update(gamma, pinocchio)
-    k_ref, dk_ref = reference_stiffness_and_derivative(problem, s, lengths, links)
+    k_ref = reference_stiffness_and_derivative(problem, s, lengths, links, False)[0]
     n_p = problem.n_params
     poses = problem.poses
     m_poses = poses.shape[0]
     law_segment = problem.stiffness_law == "segment"
     q = np.cumsum(poses, axis=1)
     cos = np.cos(q[:, :, None] - q[:, None, :])
-    if want_jacobian is not False or not pinocchio:
-        mu, dmu = link_moments(problem.planform, s, links)
-        g, dg = mass_structure(lengths[1:], mu, dmu)
+    if not pinocchio:
+        g = _mass_g(lengths[1:], links, s)
     nm = problem.n_modes
     if law_segment:
-        k_pose = np.broadcast_to(factors * k_ref, (m_poses, n))
+        k_pose = np.empty((m_poses, n))
+        k_pose[:] = factors * k_ref
     else:
         k_pose = factors[:, None] * k_ref[None, :]
     # K phi = lam M phi with K diagonal: y = K^(1/2) phi solves A y = (1/lam) y,
@@ -437,6 +459,9 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
         dgamma = (np.eye(n1) - gamma[:, None]) / total
         ds_dx = length * (ix.cum_gamma @ dgamma)
         dfreq = np.zeros((m_poses, nm, n_p))
+        dk_ref = reference_stiffness_and_derivative(problem, s, lengths, links)[1]
+        mu, dmu = link_moments(problem.planform, s, links)
+        dg = mass_structure(lengths[1:], mu, dmu)[1]
         dg_dx = dg @ ds_dx                                  # (n, n, n + 1): fractions only
         psi = ix.tri @ phi                                  # (m, n, nm)
         # dM/dx_p = S^T (C o dG/dx_p) S, contracted with phi on both sides.
