@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import TWO_LINK, UR5
+from conftest import TWO_LINK, UR5, single_link_urdf
 from test_parametric import PRISMATIC
 
 from pinflex.description import parse
@@ -43,6 +43,7 @@ def _models():
         ("flexible UR5", FlexibleModel(UR5), np.array([0.3, -0.8, 1.1, 0.2, -0.4, 0.7])),
         ("prismatic", FlexibleModel(parse(PRISMATIC)), np.array([0.2, 0.7, -0.5])),
         ("mixed", FlexibleModel(parse(MIXED)), np.array([2.9, -0.6, 0.8])),
+        ("one bar, one joint", FlexibleModel(parse(single_link_urdf(elements=6))), np.array([0.3])),
     ]
 
 
@@ -159,3 +160,32 @@ def test_small_requests_skip_the_available_memory_but_not_the_limit(monkeypatch)
     monkeypatch.setenv("PINFLEX_MAX_MEMORY_GB", "1e-9")  # about one byte
     with pytest.raises(ResourceLimitExceeded):
         resources.check_modal(23)
+
+
+def test_one_kinematics_pass_equals_pose_terms_and_node_placements(models):
+    """One kinematics pass gives the batched pose terms and the node placements.
+
+    Jacobians, joint rotations, slides and node placements from one Pinocchio pass equal
+    ``pose_terms`` and a separate forward kinematics (``node_placements``).
+    """
+    for name, model, q in models:
+        q = model.check_q(q)
+        terms, placements = model.pose_terms_and_placements(q)
+        ref, ref_placements = model.pose_terms(q[None]), model.node_placements(q)
+        for got, want in ((terms.jac, ref.jac), (terms.rot, ref.rot), (terms.slide, ref.slide)):
+            assert list(got) == list(want), name
+            for key in want:
+                assert got[key].shape == want[key].shape
+                np.testing.assert_allclose(got[key], want[key], rtol=0, atol=1e-15)
+        for link, p in ref_placements.items():
+            np.testing.assert_allclose(placements[link].positions_m, p.positions_m, atol=1e-15)
+            np.testing.assert_allclose(placements[link].rotation, p.rotation, atol=1e-15)
+
+
+def test_one_pose_frequencies_equal_the_batched_solve(models):
+    """``frequencies(q)`` (one-pose layout, NumPy only) equals the batched block assembly."""
+    for name, model, q in models:
+        batched = model.frequencies(np.stack([q, q]), n_modes=6)
+        np.testing.assert_allclose(model.frequencies(q, n_modes=6), batched[0], rtol=1e-12,
+                                   err_msg=name)
+        np.testing.assert_allclose(model.frequencies(q)[:6], batched[1], rtol=1e-12)

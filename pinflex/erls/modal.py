@@ -124,8 +124,7 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
     """
     if not solve.supported(model):
         return _frequencies_nodal(model, Q, y, n_modes=n_modes, check_bounds=check_bounds)
-    Q = model.check_q(Q)
-    y = model.check_y(y, bounds=check_bounds)
+    y = model.check_y(y, bounds=check_bounds)  # Q: checked by FlexibleModel.frequencies
     single = Q.ndim == 1
     Qb = Q[None] if single else Q
     if y.ndim == 2 and y.shape[0] != Qb.shape[0]:
@@ -133,13 +132,20 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
             f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
         )
     _check_n_modes(n_modes)
-    terms = model.pose_terms(Qb)
     layout = solve.one_pose_layout(model) if single and y.ndim == 1 else None
     if layout is not None:  # one pose: one product S^T W S instead of the block assembly
+        terms = model.pose_terms_one(Q)
         twist = solve.root_twists(model, solve.solve_plan(model), terms, 1)
-        M = solve.mass_one(model, layout, terms, twist, y)[0][None]
-    else:
-        M = solve.mass(model, terms, y, Qb.shape[0])
+        M = solve.mass_one(model, layout, terms, twist, y)[0]
+
+        def pencil1():
+            Mi, Ki = model.matrices_from_terms(terms, y, 1)
+            return (*reduced(model, Mi[0], Ki[0]), Mi[0])
+
+        lam = solve.eigvals_one(model, M, n_modes, pencil1)
+        return np.sqrt(lam) / (2.0 * np.pi)
+    terms = model.pose_terms(Qb)
+    M = solve.mass(model, terms, y, Qb.shape[0])
 
     def pencil(i):  # nodal-coordinate pair of pose i, for high modes of extreme spectra
         Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)

@@ -343,11 +343,38 @@ class FlexibleModel:
         One kinematics pass serves both (the frame placements follow from the joint placements
         the Jacobians were computed with).
         """
-        terms = self.pose_terms(q[None])
         if not self.nv:
-            return terms, self.node_placements(q)
+            return self.pose_terms(q[None]), self.node_placements(q)
+        terms = self.pose_terms_one(q)
         pin.updateFramePlacements(self.model, self.data)
         return terms, self._placements(self.data)
+
+    def pose_terms_one(self, q: np.ndarray) -> PoseTerms:
+        """:meth:`pose_terms` of one checked pose (nv,), leading axis 1, without the batch loop.
+
+        Leaves ``self.data`` at this pose (joint placements and Jacobians).
+        """
+        if not self.nv:
+            return self.pose_terms(q[None])
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, self.pin_configuration(q))
+        names, cols, A0, A1, A2, plain = self._rodrigues
+        jac = {}
+        for link in self.plan.carriers:
+            J = pin.getFrameJacobian(model, data, self.plan.frame_ids[link], pin.LOCAL)
+            J = J.reshape(6, -1)  # (6,) for one joint
+            jac[link] = (J if plain else J @ self.coord_map)[None]
+        qrel = self.coord_map @ q
+        rot, slide = {}, {}
+        if names:  # as pose_terms, one pose
+            angle = qrel[cols][:, None, None]
+            R = A0 + np.sin(angle) * A1 + (1.0 - np.cos(angle)) * A2
+            for i, name in enumerate(names):
+                rot[name] = R[i : i + 1]
+        for j in self.plan.joints:
+            if j.kind == "prismatic":
+                slide[j.name] = ((j.R_o @ j.axis) * qrel[j.user_col])[None]
+        return PoseTerms(jac, rot, slide)
 
     @property
     def design_names(self) -> tuple[str, ...]:

@@ -723,6 +723,42 @@ def eigvals(model, M: np.ndarray, n_modes: int | None = None, pencil=None) -> np
     return lam
 
 
+def eigvals_one(model, M: np.ndarray, n_modes: int | None = None, pencil=None) -> np.ndarray:
+    """:func:`eigvals` of one pose (M: (nd, nd)), without the batch bookkeeping (NumPy only).
+
+    ``pencil()`` returns the nodal-coordinate ``(Mred, Kxx, M)`` of the pose.
+    """
+    nx = model.nx
+    k = nx if n_modes is None else min(int(n_modes), nx)
+    if nx == 0:
+        return np.zeros(0)
+    if use_lanczos(nx, k):
+        return eigvals(model, M[None], n_modes,
+                       None if pencil is None else lambda *_: pencil())[0]
+    Bred = M[:nx, :nx]
+    if model.nv:
+        try:
+            L = np.linalg.cholesky(M[nx:, nx:])
+        except np.linalg.LinAlgError as exc:
+            raise EigenSolverError(
+                "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
+                "add inertia to the links it drives"
+            ) from exc
+        Y = np.linalg.solve(L, M[nx:, :nx])
+        Bred = Bred - Y.T @ Y
+    mu = np.linalg.eigvalsh(Bred)[::-1]
+    if not np.isfinite(mu).all():
+        _finite(mu)
+    ok = mu[:k] > 64.0 * _EPS * max(abs(mu[0]), abs(mu[-1]))  # as noise_level(): mu sorted
+    lam = 1.0 / mu[:k]
+    if not ok.all():
+        r = int(np.argmin(ok))
+        if pencil is None:
+            raise _unresolved(r + 1, "its eigenvalue is below the rounding level of the mass")
+        lam[r:] = _direct(pencil, r, k, False)[0]
+    return lam
+
+
 def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
     """Eigenvalues λ (k,) and mass-normalised shapes of one pose.
 
