@@ -138,7 +138,7 @@ def require_array(value, name: str, *, error: type[PinflexError] = Configuration
     """``value`` as a finite float array; strings, objects and NaN/inf refused."""
     import numpy as np
 
-    if isinstance(value, str | bytes):
+    if isinstance(value, (str, bytes)):  # a tuple: no union object built per call
         raise error(f"{name} must be numbers, got the string {value!r}")
     try:
         out = np.asarray(value, dtype=float)
