@@ -175,8 +175,10 @@ def main(argv=None):
     parser.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
     parser.add_argument("--sections", nargs="+", default=["A", "B", "C"],
                         choices=["A", "B", "C"], help="sections to run")
+    parser.add_argument("--rounds", type=int, default=None,
+                        help="interleaved rounds per ratio (default 7; 5 with --quick)")
     args = parser.parse_args(argv)
-    rounds = 5 if args.quick else 7
+    rounds = max(args.rounds, 1) if args.rounds else (5 if args.quick else 7)
     print(f"bench_modal: {blas_threads()}; {rounds} interleaved rounds per ratio; the machine "
           "may be loaded by other work, so read the ranges")
     out = {"blas": blas_threads(), "rounds": rounds}
