@@ -54,31 +54,51 @@ class SparseJetAlgebra:
 
     def mm(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Truncated product of two matrix jets (ncoef, n, m) @ (ncoef, m, r)."""
-        space = self.space
         nc, n, m = a.shape
         r = b.shape[2]
-        deg = space.degrees
-        table, codes = _lookup(space)
-        nz_a = np.flatnonzero(np.any(a.reshape(nc, -1) != 0.0, axis=1))
-        nz_b = np.flatnonzero(np.any(b.reshape(nc, -1) != 0.0, axis=1))
-        parts, targets = [], []
-        for d in np.unique(deg[nz_a]):
-            la = nz_a[deg[nz_a] == d]
-            rb = nz_b[deg[nz_b] <= space.order - d]
-            if not rb.size:
-                continue
+        nz_a = np.any(a.reshape(nc, -1) != 0.0, axis=1)
+        nz_b = np.any(b.reshape(nc, -1) != 0.0, axis=1)
+        blocks, scatter = _product_plan(self.space, nz_a.tobytes(), nz_b.tobytes())
+        if not blocks:
+            return np.zeros((nc, n, r))
+        parts = []
+        for la, rb in blocks:
             lhs = a[la].reshape(la.size * n, m)
             rhs = b[rb].transpose(1, 0, 2).reshape(m, rb.size * r)
             prod = (lhs @ rhs).reshape(la.size, n, rb.size, r).transpose(0, 2, 1, 3)
             parts.append(prod.reshape(-1, n * r))
-            targets.append(table[(codes[la][:, None] + codes[rb][None, :]).ravel()])
-        out = np.zeros((nc, n * r))
-        if parts:
-            tgt = np.concatenate(targets)
-            scatter = sp.csr_matrix((np.ones(tgt.size), (tgt, np.arange(tgt.size))),
-                                    shape=(nc, tgt.size))
-            out = np.asarray(scatter @ np.concatenate(parts, axis=0))
-        return out.reshape(nc, n, r)
+        stacked = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=0)
+        return np.asarray(scatter @ stacked).reshape(nc, n, r)
+
+
+@lru_cache(maxsize=256)
+def _product_plan(space: JetSpace, nz_a: bytes, nz_b: bytes):
+    """GEMM blocks and scatter of a truncated product, per pattern of nonzero coefficients.
+
+    The factors of one assembly share few patterns (a factor's pattern is set by the joints
+    it depends on), so the pairs, their targets and the sparse scatter are built once per
+    pattern: ``blocks`` lists, per degree of the left factor, its nonzero coefficients and
+    the right factor's nonzero ones it can pair with; ``scatter`` (ncoef × npairs) sums the
+    pair products into their target coefficients.
+    """
+    deg = space.degrees
+    table, codes = _lookup(space)
+    ia = np.flatnonzero(np.frombuffer(nz_a, dtype=bool))
+    ib = np.flatnonzero(np.frombuffer(nz_b, dtype=bool))
+    blocks, targets = [], []
+    for d in np.unique(deg[ia]):
+        la = ia[deg[ia] == d]
+        rb = ib[deg[ib] <= space.order - d]
+        if not rb.size:
+            continue
+        blocks.append((la, rb))
+        targets.append(table[(codes[la][:, None] + codes[rb][None, :]).ravel()])
+    if not blocks:
+        return (), None
+    tgt = np.concatenate(targets)
+    scatter = sp.csr_matrix((np.ones(tgt.size), (tgt, np.arange(tgt.size))),
+                            shape=(space.ncoef, tgt.size))
+    return tuple(blocks), scatter
 
 
 def static_joints(model: FlexibleModel) -> frozenset[int]:
