@@ -130,8 +130,9 @@ def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int):
     nj, nd = len(joint_idx), len(design_idx)
     if nj:
         qspace = JetSpace(nj, int(order))
-        terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
-        Mq, Mdq = solve.mass(model, terms, y0, 1, alg=SparseJetAlgebra(qspace), split=True)
+        alg = SparseJetAlgebra(qspace)
+        terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)}, alg)
+        Mq, Mdq = solve.mass(model, terms, y0, 1, alg=alg, split=True)
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:
         Mq, Mdq = solve.mass(model, model.pose_terms(q0[None]), y0, 1, split=True)

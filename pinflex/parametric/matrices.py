@@ -36,7 +36,8 @@ def _angle_terms(model: FlexibleModel, joint_vars: dict[int, int], col: int):
             if model.coord_map[col, j] != 0.0]
 
 
-def _rotation_jet(space: JetSpace, axis: np.ndarray, angle0: float, terms) -> np.ndarray:
+def _rotation_jet(space: JetSpace, axis: np.ndarray, angle0: float, terms, mm=None
+                  ) -> np.ndarray:
     """Jet of the rotation about ``axis`` by ``angle0 + Σ c_k δx_k``."""
     R = jets.constant(space, axis_rotation(axis, np.array([angle0]))[0])
     k1 = skew(axis)
@@ -48,12 +49,12 @@ def _rotation_jet(space: JetSpace, axis: np.ndarray, angle0: float, terms) -> np
         s, co = s * scale, co * scale
         step = (jets.constant(space, np.eye(3)) + s[:, None, None] * k1
                 + (one - co)[:, None, None] * k2)
-        R = jets.matmul(space, R, step)
+        R = jets.matmul(space, R, step) if mm is None else mm(R, step)
     return R
 
 
 def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
-              joint_vars: dict[int, int]) -> PoseTerms:
+              joint_vars: dict[int, int], alg=None) -> PoseTerms:
     """Jets of the ERLS pose terms (frame Jacobians, joint rotations) at ``q0``.
 
     Args:
@@ -61,7 +62,12 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
         space: Jet space.
         q0: Expansion pose in user coordinates, (nv,).
         joint_vars: Map user joint index -> jet variable index of the expanded joints.
+        alg: Jet algebra of the products (default :class:`JetAlgebra`, dense; a
+            :class:`~pinflex.parametric.conditioned.SparseJetAlgebra` skips zero
+            coefficients: a joint's rotation depends on one variable, a frame's Jacobian on
+            the joints upstream of it).
     """
+    mm = (alg or JetAlgebra(space)).mm
     nv, nc = model.nv, space.ncoef
     q0p = model.coord_map @ q0
     J = {model.plan.root: np.zeros((nc, 6, nv))}
@@ -69,7 +75,7 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
     for j in model.plan.joints:
         if j.kind == "revolute":
             terms = _angle_terms(model, joint_vars, j.user_col)
-            R = j.R_o @ _rotation_jet(space, j.axis, q0p[j.user_col], terms)
+            R = j.R_o @ _rotation_jet(space, j.axis, q0p[j.user_col], terms, mm)
             t = jets.constant(space, j.xyz)
             rot[j.name] = R
         elif j.kind == "prismatic":
@@ -88,9 +94,8 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
             J[j.child] = JP
             continue
         RT = np.swapaxes(R, -1, -2)
-        lin = JP[:, :3] - jets.matmul(space, skew(t), JP[:, 3:])
-        Jc = np.concatenate([jets.matmul(space, RT, lin), jets.matmul(space, RT, JP[:, 3:])],
-                            axis=1)
+        lin = JP[:, :3] - mm(skew(t), JP[:, 3:])
+        Jc = np.concatenate([mm(RT, lin), mm(RT, JP[:, 3:])], axis=1)
         if j.kind == "revolute":
             Jc[0, 3:, j.user_col] += j.axis
         elif j.kind == "prismatic":
