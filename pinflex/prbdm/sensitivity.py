@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .beams import Planform, compliance_between, segment_arrays
+from .beams import Planform, _partial_integrals, compliance_between, segment_arrays
 from .chain import PrbdmChain
 from .problem import FAILED_LOAD_ERROR, Evaluation, MappingProblem
 
@@ -104,6 +104,7 @@ class ChainWorkspace:
             pin.Frame("tip", parent, pin.SE3.Identity(), pin.FrameType.OP_FRAME)))
         self.model = model
         self.data = model.createData()
+        self._cosines: tuple[np.ndarray, np.ndarray] | None = None
 
     def update(self, gamma: np.ndarray, pinocchio: bool = True
                ) -> tuple[np.ndarray, np.ndarray, tuple]:
@@ -131,6 +132,16 @@ class ChainWorkspace:
         self.model.frames[self.tip_frame_id].placement = pin.SE3(
             eye, np.array([lengths[-1], 0.0, 0.0]))
         return s, lengths, links
+
+    def pose_cosines(self, poses: np.ndarray) -> np.ndarray:
+        """cos(q_a - q_b) of absolute link angles q at each pose, (m, n, n), kept per poses."""
+        cached = self._cosines
+        if cached is not None and cached[0] is poses:
+            return cached[1]
+        q = np.cumsum(poses, axis=1)
+        cos = np.cos(q[:, :, None] - q[:, None, :])
+        self._cosines = (poses, cos)
+        return cos
 
     def chain(self, lengths: np.ndarray, stiffness: np.ndarray, links: tuple) -> PrbdmChain:
         """A :class:`PrbdmChain` view of the current model (no copy of the model)."""
@@ -205,6 +216,46 @@ def mass_structure(lengths: np.ndarray, mu: np.ndarray, dmu: np.ndarray):
     dg[idx, idx] = (2.0 * lengths * outboard)[:, None] * dl + (lengths**2)[:, None] * d_out \
         + dmu[2]
     return g, dg
+
+
+def _design_geometry(problem: MappingProblem, gamma: np.ndarray):
+    """Joint positions, lengths, link properties and uncorrected stiffness in one pass.
+
+    The same numbers as :meth:`ChainWorkspace.update` (``pinocchio=False``) followed by
+    :func:`reference_stiffness_and_derivative` without the derivative: the beam's cumulative
+    integrals are evaluated once at the link ends and at the segment-law bounds together.
+    The link tuple holds (mass, com, None, iyy, None, mean area moment, None).
+    """
+    planform = problem.planform
+    length = planform.length_m
+    n = gamma.size - 1
+    lengths = gamma * length
+    s = np.cumsum(lengths)[:-1]
+    segment = problem.stiffness_law == "segment"
+    ends = np.empty(n + 1)
+    ends[:n], ends[n] = s, length
+    if segment:
+        points = np.concatenate([ends, 0.5 * (ends[:n - 1] + ends[1:n])])
+    else:
+        points = ends
+    cumulative = _partial_integrals(planform, points)
+    seg = cumulative[1:n + 1] - cumulative[:n]
+    m0, m1, m2 = seg[:, 0], seg[:, 1], seg[:, 2]
+    t = planform.thickness_m
+    rho_t = planform.material.density_kg_m3 * t
+    mass = rho_t * m0
+    com = m1 / m0
+    iyy = rho_t * (m2 - com * m1) + mass * t**2 / 12.0
+    ell = ends[1:] - ends[:-1]
+    mean_i = m0 * t**3 / 12.0 / ell
+    e = planform.material.youngs_modulus_pa
+    if segment:
+        inv = np.empty(n + 1)
+        inv[0], inv[1:n], inv[n] = 0.0, cumulative[n + 1:, 4], cumulative[n, 4]
+        k_ref = e / (inv[1:] - inv[:-1])
+    else:
+        k_ref = np.sqrt(e * mean_i / mass)
+    return s, lengths, (mass, com, None, iyy, None, mean_i, None), k_ref
 
 
 def _mass_g(lengths: np.ndarray, links: tuple, s: np.ndarray) -> np.ndarray:
@@ -373,14 +424,16 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
     gamma = raw / total
     factors = np.exp(x[n1:])
     length = problem.planform.length_m
-    s, lengths, links = workspace.update(gamma, pinocchio)
-    k_ref = reference_stiffness_and_derivative(problem, s, lengths, links, False)[0]
+    if pinocchio:
+        s, lengths, links = workspace.update(gamma, True)
+        k_ref = reference_stiffness_and_derivative(problem, s, lengths, links, False)[0]
+    else:
+        s, lengths, links, k_ref = _design_geometry(problem, gamma)
     n_p = problem.n_params
     poses = problem.poses
     m_poses = poses.shape[0]
     law_segment = problem.stiffness_law == "segment"
-    q = np.cumsum(poses, axis=1)
-    cos = np.cos(q[:, :, None] - q[:, None, :])
+    cos = workspace.pose_cosines(poses)
     if not pinocchio:
         g = _mass_g(lengths[1:], links, s)
     nm = problem.n_modes
