@@ -520,21 +520,33 @@ def section_study(store_path: str, outdir: str) -> None:
     rows = con.execute("SELECT item, status, result, metrics, timings FROM results").fetchall()
     by_n: dict = {}
     cpu: dict = {}
+    truth_cpu: dict = {}
+    fit_cpu: dict = {}
+    failed = 0
     for item, status, result, metrics, timings in rows:
         t = json.loads(timings)
+        truth_cpu[item] = t.get("truth_cpu_s", 0.0)
         cpu.setdefault(item, t.get("truth_cpu_s", 0.0))
         cpu[item] += t.get("fit_cpu_s", 0.0)
         if status != "ok":
+            failed += 1
             continue
         n = json.loads(result)["n_joints"]
         by_n.setdefault(n, []).append(json.loads(metrics))
+        fit_cpu.setdefault(n, []).append(t.get("fit_cpu_s", 0.0))
+    # Beams with every model stored (a beam's rows arrive together).
     beams = len(cpu)
     per_beam = float(np.mean(list(cpu.values()))) if cpu else float("nan")
-    print(f"== study {store_path}: {beams} beams, {len(rows)} rows; CPU per beam (truth + all "
-          f"fits) {per_beam:.1f} s -> 1,000 beams {per_beam * 1000 / 3600:.1f} core-h, "
-          f"50,000 beams {per_beam * 50000 / 3600:.0f} core-h")
+    print(f"== study {store_path}: {beams} beams, {len(rows)} rows ({failed} failed); CPU per "
+          f"beam (truth + all fits) {per_beam:.1f} s -> 1,000 beams "
+          f"{per_beam * 1000 / 3600:.1f} core-h, 50,000 beams {per_beam * 50000 / 3600:.0f} "
+          f"core-h ({_load()})")
+    print(f"   CPU split per beam: truth {np.mean(list(truth_cpu.values())):.2f} s; fits "
+          + ", ".join(f"{n}R {np.mean(v):.2f} s" for n, v in sorted(fit_cpu.items())))
     keys = ("eigen_error", "deflection_error", "combined_error", "eq15a_sum")
-    out = {"beams": beams, "cpu_per_beam_s": per_beam, "per_n": {}}
+    out = {"beams": beams, "cpu_per_beam_s": per_beam, "failed_rows": failed,
+           "truth_cpu_s": float(np.mean(list(truth_cpu.values()))) if truth_cpu else None,
+           "fit_cpu_s": {n: float(np.mean(v)) for n, v in fit_cpu.items()}, "per_n": {}}
     fig, axes = plt.subplots(1, 3, figsize=(10, 3.6), sharey=True)
     for n in sorted(by_n):
         vals = {k: 100 * np.array([m[k] for m in by_n[n]]) for k in keys}
