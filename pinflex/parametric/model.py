@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -289,16 +290,31 @@ class TaylorModel:
         Qa = np.asarray(Q, dtype=float)
         if plan.q0_col is not None and Y is None and Qa.ndim == 2 and Qa.shape[1] == plan.nq:
             # all joints expanded, in order, no design: the offsets go straight into the rows
-            rows = np.empty((plan.ncoef, Qa.shape[0]))
+            n = Qa.shape[0]
+            if plan.lock.acquire(blocking=False):  # this thread owns the scratch rows
+                try:
+                    scratch = plan.scratch.get(n) or plan.new_scratch(n)
+                    rows, first, views = scratch
+                    if first is not None:
+                        np.subtract(Qa.T, plan.q0_col, out=first)
+                    for src, row, dst in views:
+                        np.multiply(src, row, out=dst)
+                    return self._finish(rows, None, Qa, Y, key, warn, strict, tol)
+                finally:
+                    plan.lock.release()
+            rows = np.empty((plan.ncoef, n))  # another thread evaluates: rows of its own
             rows[0] = 1.0
             if plan.ncoef > 1:
                 np.subtract(Qa.T, plan.q0_col, out=rows[1 : 1 + plan.nvars])
             for d0, d1, s0, s1, r in plan.steps:
                 np.multiply(rows[s0:s1], rows[r], out=rows[d0:d1])
-            dx = None
-        else:
-            dx = self.offsets(Qa, Y, warn=False)
-            rows = monomial_rows(self.space, dx.T)
+            return self._finish(rows, None, Qa, Y, key, warn, strict, tol)
+        dx = self.offsets(Qa, Y, warn=False)
+        return self._finish(monomial_rows(self.space, dx.T), dx, Qa, Y, key, warn, strict, tol)
+
+    def _finish(self, rows, dx, Qa, Y, key, warn, strict, tol):
+        """Values from the monomial rows (ncoef, n), with the radius check when asked."""
+        plan = self.evaluation_plan
         if not (warn or strict):
             return (plan.values[key] @ rows).T
         checked = plan.checked.get(key)
@@ -317,7 +333,7 @@ class TaylorModel:
             dx = self.offsets(Q, Y, warn=False)
         quantity, linear = key
         est, ratio, value = self._estimate_from(dx, mon @ self.degree_blocks[quantity])
-        self._report(est, ratio, tol, strict, stacklevel=4)
+        self._report(est, ratio, tol, strict, stacklevel=5)
         if linear:
             return mon @ self.coefficients(quantity, linear_in_design=True)
         return value
@@ -392,6 +408,25 @@ class _EvaluationPlan:
     last: int  # group of order p
     before_last: int  # group of order p - 1 (-1: the constant, ratio 1)
     ncheck: int
+    lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
+    scratch: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def new_scratch(self, n: int):
+        """Monomial rows for ``n`` samples, kept for the next calls (a few sizes, bounded).
+
+        Returns ``(rows, first, views)``: the rows (ncoef, n) with the constant row set, the
+        view the offsets go into, and the ``(source, row, target)`` views of the steps.
+        Callers hold :attr:`lock`.
+        """
+        rows = np.empty((self.ncoef, n))
+        rows[0] = 1.0
+        first = rows[1 : 1 + self.nvars] if self.ncoef > 1 else None
+        views = tuple((rows[s0:s1], rows[r], rows[d0:d1]) for d0, d1, s0, s1, r in self.steps)
+        if len(self.scratch) >= 4 or rows.nbytes > 8 << 20:
+            self.scratch.clear()
+        if rows.nbytes <= 8 << 20:
+            self.scratch[n] = (rows, first, views)
+        return rows, first, views
 
     @classmethod
     def build(cls, tm: TaylorModel) -> _EvaluationPlan:
