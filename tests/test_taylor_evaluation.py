@@ -107,3 +107,23 @@ def test_strict_raises_and_warning_points_at_the_caller(arm):
     with pytest.warns(TaylorRadiusWarning) as rec:
         tm.evaluate(q, quantity="freq_hz")
     assert rec[0].filename == __file__
+
+
+def test_concurrent_evaluations_do_not_share_rows(arm):
+    """Threads evaluating one model at once (same sample count) get their own values."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    tm = expand(arm, Q0, Y0, order=4, modes=(1, 2), design=[])
+    rng = np.random.default_rng(11)
+    batches = [Q0 + 0.3 * rng.uniform(-1, 1, size=(64, 2)) for _ in range(8)]
+    expected = [jets.evaluate(tm.space, tm.jet("freq_hz"), tm.offsets(Q, warn=False))
+                for Q in batches]
+
+    def run(i):
+        return [tm.evaluate(batches[i], quantity="freq_hz", warn=False) for _ in range(300)]
+
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        results = list(pool.map(run, range(8)))
+    for got, ref in zip(results, expected):
+        for g in got:
+            np.testing.assert_allclose(g, ref, rtol=1e-13, atol=0)
