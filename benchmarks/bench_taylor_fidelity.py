@@ -6,8 +6,9 @@ trajectory (nominal design, joints expanded), and of the flexible UR5 at 40 samp
 samples and modes against the exact model at the same samples (the value the series
 converges to). Estimate: the next-order estimate ``max |T_(p+1) - T_p| / |T_(p+1)|`` that
 ``expand(tol=...)`` / ``pinflex assign --tol`` use to pick the order. Time: one evaluation of
-every sample (monomials rebuilt, radius check off; median of interleaved rounds, single-thread
-BLAS, the machine may be loaded), and the expansion time.
+every sample (monomials rebuilt, radius check off; this thread's CPU time, median of
+interleaved rounds, single-thread BLAS, so a loaded machine inflates it less than wall time),
+and the expansion time (wall).
 
 1  Taylor order p = 1..8, one expansion point (benchmark A at q0; the UR5 at its pose).
 2  Expansion points: benchmark A's trajectory cut into K equal runs of samples, each covered
@@ -70,7 +71,7 @@ def order_study(model, q0, Q, joints, orders, rounds):
         t_exp = time.perf_counter() - t0
         err = float(np.max(np.abs(tm.evaluate(Q, quantity="freq_hz", warn=False) / exact - 1)))
         t = interleaved({"e": lambda: tm.evaluate(Q, quantity="freq_hz", warn=False)},
-                        rounds=rounds, number=200)["e"]
+                        rounds=rounds, number=200, clock=time.thread_time)["e"]
         rows.append((p, err, float(np.max(est[p])), float(np.median(t)), t_exp))
     return rows
 
@@ -91,7 +92,7 @@ def points_study(model, Q, order, counts, rounds):
             return [tm.evaluate(Q[a:b], quantity="freq_hz", warn=False) for tm, a, b in parts]
 
         err = float(np.max(np.abs(np.concatenate(run()) / exact - 1)))
-        t = interleaved({"e": run}, rounds=rounds, number=100)["e"]
+        t = interleaved({"e": run}, rounds=rounds, number=100, clock=time.thread_time)["e"]
         rows.append((K, err, float(np.median(t)), t_exp))
     return rows
 
@@ -106,8 +107,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     rounds = 3 if args.quick else 5
-    print(f"bench_taylor_fidelity: {blas_threads()}; times = median of {rounds} interleaved "
-          "rounds")
+    print(f"bench_taylor_fidelity: {blas_threads()}; evaluation times = thread CPU time, median "
+          f"of {rounds} interleaved rounds")
     cases = _cases()
     out: dict = {"blas": blas_threads(), "rounds": rounds, "order": {}, "points": {}}
     for name, (model, q0, Q, joints) in cases.items():
@@ -148,7 +149,7 @@ def main(argv=None):
             ax.loglog(t, [r["estimate"] for r in rows], "x--", label=f"{name}: estimate")
             for r in rows:
                 ax.annotate(f"p={r['order']}", (r["eval_s"], r["error"]), fontsize=7)
-        ax.set_xlabel("time per evaluation of all samples [s]")
+        ax.set_xlabel("CPU time per evaluation of all samples [s]")
         ax.set_ylabel("relative frequency error, modes 1-3 (max)")
         ax.set_title("Taylor order (one expansion point)")
         ax.grid(alpha=0.3, which="both")
@@ -159,7 +160,7 @@ def main(argv=None):
             ax.loglog(t, [r["error"] for r in rows], "o-", label=f"benchmark A, {key}")
             for r in rows:
                 ax.annotate(f"K={r['points']}", (r["eval_s"], r["error"]), fontsize=7)
-        ax.set_xlabel("time per evaluation of all 152 samples [s]")
+        ax.set_xlabel("CPU time per evaluation of all 152 samples [s]")
         ax.set_title("Expansion points along the trajectory")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)

@@ -29,6 +29,7 @@ from pinflex.parametric.matrices import matrix_jets
 RADIUS_TOL = 1e-2
 """Default warning level of the estimated relative truncation error (1 %)."""
 _TINY = np.finfo(float).tiny
+_MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python-level wrapper per call
 
 
 @dataclass(frozen=True)
@@ -323,7 +324,7 @@ class TaylorModel:
         # one product: the value and, per check row, every sample's order-j part or rate
         S = checked @ rows
         k = plan.k
-        if plan.screen_passes(np.abs(S[k:]).max(axis=1).tolist(), tol):
+        if plan.screen_passes(_MAX(np.abs(S[k:]), axis=1).tolist(), tol):
             return S[:k].T
         return self._checked_slow(rows.T, dx, Qa, Y, key, tol, strict)
 
