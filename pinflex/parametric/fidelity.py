@@ -13,10 +13,10 @@ expansion was run at), so :func:`order_for_tolerance` expands at a ladder of ord
 model of the lowest such order: no more model than the samples need.
 
 This is an estimate, not a bound: it assumes the omitted series is led by its first term. On
-benchmark A's trajectory (modes 1–3) it is 0.9–3.2 × the actual error for orders 1–8, on the
-flexible UR5 within ±0.3 rad of a general pose 0.95–1.3 × for orders 1–5
-(``python benchmarks/bench_taylor_fidelity.py``); where it is below the actual error, by
-up to 15 % there, the chosen model can miss the tolerance by that much.
+benchmark A's trajectory (modes 1–3, nominal design) it is 0.88–1.9 × the actual error for
+orders 1–8, on the flexible UR5 at 40 samples within ±0.1 rad of a general pose 0.83–1.1 × for
+orders 1–5 (``python benchmarks/bench_taylor_fidelity.py``); where it is below the actual error,
+by up to ~20 % there, the chosen model can miss the tolerance by that much.
 """
 
 from __future__ import annotations
