@@ -449,13 +449,14 @@ class _EvaluationPlan:
         for (quantity, linear), value in values.items():
             full = tm.coefficient_matrices[quantity, False]
             c0 = np.abs(full[0])
-            if p < 1 or not np.all(c0 > 1e-250) or not np.all(np.isfinite(full)):
+            if (p < 1 or not np.all(c0 > 1e-250) or not np.all(np.isfinite(full))
+                    or (W is not None and not np.all(np.isfinite(W)))):
                 continue
-            cols = np.zeros((space.ncoef, groups, k))
+            cols = np.zeros((space.ncoef, k, groups))  # mode-major: a mode's rows together
             for g, j in enumerate(orders):
-                cols[off[j] : off[j + 1], g] = full[off[j] : off[j + 1]] / c0
+                cols[off[j] : off[j + 1], :, g] = full[off[j] : off[j + 1]] / c0
             if W is not None and w:
-                cols[1 : 1 + space.nvars, len(orders):] = W.reshape(-1, k, w).transpose(0, 2, 1)
+                cols[1 : 1 + space.nvars, :, len(orders):] = W.reshape(-1, k, w)
             checked[quantity, linear] = _readonly(np.ascontiguousarray(
                 np.concatenate([value, cols.reshape(space.ncoef, groups * k).T], axis=0)))
         return cls(
@@ -473,27 +474,22 @@ class _EvaluationPlan:
         ``colmax``: largest magnitude over the samples of each check row of
         ``checked @ mon``.
         """
-        k = self.k
+        G = self.ncheck // self.k
+        spec0 = self.spec[0] if self.spec else G
         bound = tol * (1.0 - 1e-9)  # rounding margin: undecided cases go per sample
-        for c in range(k):
+        for base in range(0, self.ncheck, G):
             rho = 0.0
             for g, inv_j in self.root:
-                i = g * k + c
-                r = colmax[i] ** inv_j
+                r = colmax[base + g] ** inv_j
                 if not r <= rho:  # NaN propagates: the per-sample path then decides
                     rho = r
-            for g in self.spec:
-                i = g * k + c
-                r = colmax[i]
-                if not r <= rho:
-                    rho = r
+            if spec0 < G:  # (a NaN offset already made the root rows NaN)
+                rho = max(rho, max(colmax[base + spec0 : base + G]))
             if not rho < 1.0:
                 return False
-            i = self.last * k + c
-            tail = colmax[i]
+            tail = colmax[base + self.last]
             if self.before_last >= 0:
-                i = self.before_last * k + c
-                tail = max(tail, rho * colmax[i])
+                tail = max(tail, rho * colmax[base + self.before_last])
             else:
                 tail = max(tail, rho)
             if not tail * rho / max(1.0 - rho, 1e-12) <= bound:
