@@ -189,3 +189,18 @@ def test_one_pose_frequencies_equal_the_batched_solve(models):
         np.testing.assert_allclose(model.frequencies(q, n_modes=6), batched[0], rtol=1e-12,
                                    err_msg=name)
         np.testing.assert_allclose(model.frequencies(q)[:6], batched[1], rtol=1e-12)
+
+
+def test_one_pose_root_twists_equal_the_batched_ones(models):
+    """The one-pose root-twist recursion equals the batched one link by link (round-off)."""
+    for name, model, q in models:
+        terms = model.pose_terms_one(model.check_q(q))
+        plan = solve.solve_plan(model)
+        ref = solve.root_twists(model, plan, terms, 1)
+        got = solve.root_twists_one(model, plan, terms)
+        assert list(got) == list(ref), name
+        for link, e in ref.items():
+            if e is None:
+                assert got[link] is None, (name, link)
+            else:
+                np.testing.assert_allclose(got[link], e, rtol=0, atol=1e-15 * np.abs(e).max())

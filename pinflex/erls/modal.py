@@ -135,7 +135,7 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
     layout = solve.one_pose_layout(model) if single and y.ndim == 1 else None
     if layout is not None:  # one pose: one product S^T W S instead of the block assembly
         terms = model.pose_terms_one(Q)
-        twist = solve.root_twists(model, solve.solve_plan(model), terms, 1)
+        twist = solve.root_twists_one(model, solve.solve_plan(model), terms)
         M = solve.mass_one(model, layout, terms, twist, y)[0]
 
         def pencil1():
@@ -233,7 +233,7 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
     _check_n_modes(n_modes)
     terms, placements = model.pose_terms_and_placements(q)
     plan = solve.solve_plan(model)
-    twist = solve.root_twists(model, plan, terms, 1)
+    twist = solve.root_twists_one(model, plan, terms)
     layout = solve.one_pose_layout(model) if y.ndim == 1 else None
     if layout is not None:
         M, S = solve.mass_one(model, layout, terms, twist, y)

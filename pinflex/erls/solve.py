@@ -222,6 +222,32 @@ def _twist_at(att: _Attach, root, alg, nx: int):
     return out
 
 
+def root_twists_one(model, plan: SolvePlan, terms) -> dict:
+    """:func:`root_twists` of one pose (b = 1), without the algebra indirection."""
+    nx = plan.nx
+    twist: dict = {model.plan.root: None}
+    for j, att in zip(model.plan.joints, plan.joint_attach):
+        e = twist[j.parent]
+        if e is None and att.const is None:
+            twist[j.child] = None
+            continue
+        tau = np.zeros((6, nx)) if e is None else att.lin @ e[0]
+        if att.const is not None:
+            tau[:, att.start : att.stop] += att.const
+        if j.kind == "prismatic":
+            tau = tau + offset_block(terms.slide[j.name])[0] @ tau
+            RT = j.R_o.T
+        elif j.kind == "revolute":
+            RT = terms.rot[j.name][0].T
+        else:
+            RT = j.R_o.T
+        out = np.empty((6, nx))
+        out[:3] = RT @ tau[:3]
+        out[3:] = RT @ tau[3:]
+        twist[j.child] = (j.proj @ out)[None]
+    return twist
+
+
 def root_twists(model, plan: SolvePlan, terms, b: int, alg=None) -> dict:
     """Elastic twist of every link root (link axes) in solver coordinates, (b, 6, nx)."""
     alg = _algebra(alg, b)
