@@ -112,3 +112,28 @@ def test_cli_assign_tol_reports_order_and_estimate(tmp_path):
     choice = data["taylor_order_choice"]
     assert data["taylor_order"] == choice["order"]
     assert choice["estimate"] <= 1e-3 < choice["estimates"][str(choice["order"] - 1)]
+
+
+def test_expansion_points_by_estimate_cover_benchmark_a_and_flag_a_miss(arm):
+    """expand_along(criterion='estimate') on benchmark A's trajectory, modes 1-2.
+
+    tol 1e-3: the same cover as the exact criterion, its estimate within 1.5x of the exact
+    error and within tol. tol 1e-4: the estimate is optimistic (its cover is off by more than
+    tol against the exact model), which the exact check reports with a warning.
+    """
+    from pinflex.exceptions import TaylorRadiusWarning
+    from pinflex.parametric import expand_along
+
+    Q = benchmark_trajectory(arm).q
+    y = np.zeros(2)
+    kw = {"orders": (1, 2, 3, 4), "modes": (1, 2)}
+    exact = expand_along(arm, Q, y, tol=1e-3, **kw)
+    est = expand_along(arm, Q, y, tol=1e-3, criterion="estimate", **kw)
+    assert (len(est.models), est.order) == (len(exact.models), exact.order)
+    assert est.estimate <= 1e-3 and est.max_error <= 1e-3
+    assert 1 / 1.5 < est.estimate / est.max_error < 1.5
+    with pytest.warns(TaylorRadiusWarning, match="exact relative error"):
+        miss = expand_along(arm, Q, y, tol=1e-4, criterion="estimate", **kw)
+    assert miss.estimate <= 1e-4 < miss.max_error
+    with pytest.raises(ConfigurationError, match="criterion"):
+        expand_along(arm, Q, y, criterion="guess")
