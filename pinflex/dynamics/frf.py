@@ -54,6 +54,11 @@ def linear_pose(dyn, q, inputs, outputs, *, damping: Damping | None = None,
     """The matrices of the receptance at pose ``q`` (see the module doc)."""
     if joints not in ("free", "locked"):
         raise ConfigurationError(f"joints = {joints!r} must be 'free' or 'locked'")
+    if joints == "free" and dyn.locked:
+        raise ConfigurationError(
+            f"joints {[n for n, _ in dyn.locked]} are locked in this model; joints='free' "
+            "would free them: use joints='locked' (every joint held) or build the model with "
+            "springs")
     q = dyn.model.check_q(q).astype(float)
     M, _, K, _ = dyn.linear_terms(q)
     nx, nd = dyn.nx, dyn.ndof

@@ -413,6 +413,16 @@ def simulate_prescribed(
     """
     motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
     _check_positive(after_s=after_s, sample_hz=sample_hz, rtol=rtol, atol=atol)
+    if dyn.locked:
+        # a locked joint is a prescribed joint that does not move: the drive holds it
+        Qp = np.asarray(motion.trajectory.q, dtype=float) @ dyn.model.coord_map.T
+        for name, col in dyn.locked:
+            span = float(np.ptp(Qp[:, col]))
+            if span > 1e-9 * max(1.0, float(np.abs(Qp[:, col]).max())):
+                raise ConfigurationError(
+                    f"joint '{name}' is locked but the trajectory turns it by {span:.3g} (rad "
+                    "or m): hold it constant in the trajectory, or do not lock it (joints='free'"
+                    " or a spring stiffness)")
     if start not in ("static", "rest"):
         raise ConfigurationError(f"start = {start!r} must be 'static' or 'rest'")
     if dyn.nx == 0:
@@ -608,6 +618,12 @@ def simulate_torque(
     damping = damping or Damping()
     if damping.kind == "modal":
         raise ConfigurationError("the torque drive takes Rayleigh damping or none")
+    if dyn.locked:
+        raise ConfigurationError(
+            f"the torque drive integrates every joint coordinate; joints "
+            f"{[n for n, _ in dyn.locked]} are locked in this model: model a brake as a stiff "
+            "spring (joints={name: stiffness}), or hold the joints with the prescribed drive "
+            "(drive = 'prescribed', the trajectory constant in them)")
     nx, nv, nd = dyn.nx, dyn.nv, dyn.ndof
     Cm = dyn.model.coord_map
     q0 = dyn.model.check_q(q0).astype(float)

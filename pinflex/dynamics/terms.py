@@ -90,7 +90,9 @@ class ErlsDynamics:
     """Equations of motion of paper 000 eq. (1) for a :class:`~pinflex.FlexibleModel`.
 
     Args:
-        model: The flexible model (its current point-mass values are the defaults).
+        model: The flexible model (its current point-mass values are the defaults). Locked
+            joints (``joints='locked'`` or per joint) are constraints on the drive: a
+            prescribed motion must hold their physical angle; the torque drive refuses them.
         y: Design values [kg] (default: the model's nominal values).
         gravity: Gravity acceleration in world axes [m/s²], (3,) (default zero, as in paper 000's
             benchmark).
@@ -105,7 +107,10 @@ class ErlsDynamics:
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ConfigurationError(f"gravity must be 3 finite numbers [m/s²], got {gravity!r}")
         self.gravity = g
-        self.nx, self.nv, self.ndof = model.nx, model.nv, model.ndof
+        # eq. (1) is written over every coordinate [x; q_all]; a locked joint is a constraint
+        # of the drive on its physical angle (see ``locked``), not a change of the terms
+        self.nx, self.nv = model.nx, model.nv
+        self.ndof = self.nx + self.nv
         self._pdata = model.model.createData()
         self._points, self._rotors = _build_carriers(model, self.y)
         self._links = sorted({c.link for c in self._points} | {c.link for c in self._rotors},
@@ -116,12 +121,10 @@ class ErlsDynamics:
             j.attach.lin is not None and j.parent != model.plan.root and j.user_col >= 0
             for j in model.plan.joints)
         conds = getattr(model, "joint_conditions", ())
-        locked = [c.name for c in conds if c.kind == "locked"]
-        if locked:
-            raise ConfigurationError(
-                f"the dynamics needs every joint coordinate; joints {locked} are locked in this "
-                "model: build it with joints='free' or with springs (a prescribed motion holds "
-                "the joints anyway)")
+        #: locked joints ``(name, user column)``: their physical angle is held constant (the
+        #: prescribed drive checks that the trajectory holds them; the torque drive refuses)
+        self.locked = tuple((c.name, model.joint_index(c.name)) for c in conds
+                            if c.kind == "locked")
         #: joint springs ``(user column, stiffness)`` on the physical relative motion
         self._springs = [(model.joint_index(c.name), float(c.stiffness)) for c in conds
                          if c.kind == "spring"]
