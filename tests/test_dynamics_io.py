@@ -58,8 +58,9 @@ def test_joint_springs_enter_the_stiffness():
     q = np.array([1.8, 5.3])
     assert np.allclose(dyn.linear_terms(q)[2], fm.matrices(q)[1], rtol=0,
                        atol=1e-9 * np.abs(fm.matrices(q)[1]).max())
-    with pytest.raises(ConfigurationError):
-        ErlsDynamics(FlexibleModel(URDF / "two_link.urdf", planar=True, joints="locked"))
+    # locked joints are constraints of the drive (tests/test_dynamics_locked.py), not of eq. (1)
+    locked = ErlsDynamics(FlexibleModel(URDF / "two_link.urdf", planar=True, joints="locked"))
+    assert locked.locked == (("q1", 0), ("q2", 1)) and locked.ndof == fm.nx + 2
 
 
 def test_frf_from_modes_equals_the_direct_solve(arm, tmp_path):

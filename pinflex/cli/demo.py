@@ -32,8 +32,10 @@ def add_parser(sub) -> None:
     d.add_argument("--no-brute-force", action="store_true",
                    help="skip the exact grid search that checks the QP's answer")
     d.add_argument("--vibration", action="store_true",
-                   help="also simulate the tip vibration of the baseline and the assigned design "
-                   "along the motion (pinflex.dynamics)")
+                   help="simulate the tip vibration of the baseline and the assigned design along "
+                   "the motion (pinflex.dynamics; the default, kept for scripts)")
+    d.add_argument("--no-vibration", action="store_true",
+                   help="skip the vibration simulation (about 3 s of compute)")
     add_model_arguments(d)
     d.set_defaults(func=cmd_demo)
 
@@ -148,8 +150,8 @@ def outputs_section(demo: Demo) -> None:
 
 
 def vibration_section(demo: Demo) -> None:
-    """With ``--vibration``: tip vibration of the baseline and the assigned design."""
-    if not demo.args.vibration:
+    """Tip vibration of the baseline and the assigned design (unless ``--no-vibration``)."""
+    if getattr(demo.args, "no_vibration", False):
         return
     from pinflex.dynamics.demo import vibration_demo
 
