@@ -18,6 +18,8 @@ Example (all keys optional; the defaults shown)::
     atol = 1e-9                 # [m, rad]
     rho_inf = 0.9               # torque drive: generalized-alpha high-frequency radius
                                 # (prescribed: 1, the trapezoidal rule, unless given)
+    # step_s = 2e-4             # torque drive (default: adaptive, rtol/atol): fixed steps
+                                # of step_s and step_s / 2, Richardson-extrapolated
     kp = 0.0                    # torque drive: PD gains on the motor angles [N m/rad]
     kd = 0.0                    #               [N m s/rad]
 
@@ -59,6 +61,7 @@ class SimulationSettings:
     atol: float = 1e-9
     rho_inf: float | None = None
     tol: float | None = None
+    step_s: float | None = None
     kp: float = 0.0
     kd: float = 0.0
 
@@ -70,6 +73,7 @@ _NUMBERS = {  # key: (lower, upper, lower inclusive)
     "atol": (0.0, math.inf, False),
     "rho_inf": (0.0, 1.0, True),
     "tol": (0.0, 1.0, False),
+    "step_s": (0.0, math.inf, True),
     "kp": (0.0, math.inf, True),
     "kd": (0.0, math.inf, True),
 }
@@ -196,6 +200,7 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
                               kp=settings.kp, kd=settings.kd, damping=settings.damping,
                               sample_hz=settings.sample_hz, rtol=settings.rtol,
                               atol=settings.atol,
-                              rho_inf=0.9 if settings.rho_inf is None else settings.rho_inf)
+                              rho_inf=0.9 if settings.rho_inf is None else settings.rho_inf,
+                              step_s=settings.step_s or None)
     rep = vibration_report(dyn, sim, name=name, frame=settings.frame, xyz=settings.point)
     return rep, sim, dyn
