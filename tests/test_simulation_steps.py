@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -110,3 +111,29 @@ def test_bad_step_settings_are_refused():
                {"method": "newmark", "tol": 1e-3}):
         with pytest.raises(ConfigurationError):
             simulate_prescribed(dyn, traj, after_s=0.01, **kw)
+
+
+def test_simulate_command_tol_reaches_the_integrator(tmp_path, capsys):
+    """`pinflex simulate --tol`: each design's step-error estimate meets it; bad values refused."""
+    from pinflex.cli import main
+
+    t = np.linspace(0.0, 0.12, 25)
+    s = t / 0.12
+    q = np.array([1.7, 5.1])[None] + (10 * s**3 - 15 * s**4 + 6 * s**5)[:, None] * 0.2
+    csv = tmp_path / "move.csv"
+    csv.write_text("t,q1,q2\n" + "\n".join(f"{a},{b},{c}" for a, (b, c) in zip(t, q)))
+    study = tmp_path / "s.toml"
+    study.write_text('robot = "builtin:two_link.urdf"\nplanar = true\n'
+                     f'[trajectory]\ncsv = "{csv}"\n[[targets]]\nmode = 1\nfreq_hz = 190.0\n'
+                     '[simulation]\nafter_s = 0.02\nsample_hz = 4000.0\n')
+    assert main(["simulate", str(study), "--json", "--tol", "1e-3"]) == 0
+    designs = json.loads(capsys.readouterr().out)["designs"]
+    assert len(designs) == 2
+    for d in designs:
+        assert 0.0 < d["step_error_estimate"] <= 1e-3
+    assert main(["simulate", str(study), "--json"]) == 0  # one pair: a coarser estimate
+    loose = json.loads(capsys.readouterr().out)["designs"]
+    assert all(a["step_error_estimate"] > b["step_error_estimate"]
+               for a, b in zip(loose, designs))
+    assert main(["simulate", str(study), "--json", "--tol", "0"]) == 2
+    assert "tol" in capsys.readouterr().err
