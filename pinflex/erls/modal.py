@@ -274,28 +274,27 @@ def _layout_fields(model, layout, S: np.ndarray, placements, sw: np.ndarray):
     """As :func:`_solver_fields`, for every beam at once through the one-pose layout.
 
     ``Z = S sw`` holds each beam's own coordinates, root twist and frame twist per mode; the
-    node twists (beam axes) are ``A Z`` (``A_el Z`` without the frame motion, both in one
-    product ``A2 Z``), the nodal coordinates ``X Z``; each node's two 3-vectors are then
-    turned to world axes.
+    nodal coordinates ``X Z`` and the node twists (beam axes) ``A Z`` and ``A_el Z`` (without
+    the frame motion) come from one product ``F Z`` (rows of :class:`solve.OnePoseLayout`);
+    each node's 3-vectors are then turned to world axes, one product per beam.
     """
     nx = model.nx
     k = sw.shape[1]
-    Z = S @ sw
-    x = layout.X @ Z
-    sign = np.where(x[np.argmax(np.abs(x), axis=0), np.arange(k)] < 0, -1.0, 1.0)
+    G = layout.F @ (S @ sw)  # [x; per beam: node twists, elastic node twists] per mode
+    x = G[:nx]
+    sign = np.where(x.ravel()[np.abs(x).argmax(0) * k + np.arange(k)] < 0, -1.0, 1.0)
+    G *= sign  # largest elastic component positive
     shapes = np.empty_like(sw)
     shapes[:nx] = x
-    shapes[nx:] = sw[nx:]
-    shapes *= sign
-    Z *= sign
-    R = np.stack([placements[link].rotation for link in layout.node_slices])[layout.node_links]
-    both = R @ (layout.A2 @ Z).reshape(-1, 3, k)  # total motion, then elastic, per 3-row block
-    half = both.shape[0] // 2
+    np.multiply(sw[nx:], sign, out=shapes[nx:])
     positions, motion, elastic = {}, {}, {}
-    for link, (a, b) in layout.node_slices.items():
-        positions[link] = placements[link].positions_m
-        motion[link] = both[a:b].reshape(-1, 6, k).transpose(2, 0, 1)
-        elastic[link] = both[half + a : half + b].reshape(-1, 6, k).transpose(2, 0, 1)
+    for link, (a, b) in layout.field_rows.items():
+        pl = placements[link]
+        both = pl.rotation @ G[a:b].reshape(-1, 3, k)  # each 3-row block to world axes
+        h = both.shape[0] // 2
+        positions[link] = pl.positions_m
+        motion[link] = both[:h].reshape(-1, 6, k).transpose(2, 0, 1)
+        elastic[link] = both[h:].reshape(-1, 6, k).transpose(2, 0, 1)
     return shapes, positions, motion, elastic
 
 

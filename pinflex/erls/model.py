@@ -329,11 +329,25 @@ class FlexibleModel:
     def _placements(self, data) -> dict[str, NodePlacement]:
         """Node placements from Pinocchio ``data`` whose frame placements are up to date."""
         out = {}
-        for link, bp in self.plan.beams.items():
-            H = data.oMf[self.plan.frame_ids[link]].homogeneous
-            R = H[:3, :3]
-            out[link] = NodePlacement(bp.nodes @ R.T + H[:3, 3], R @ bp.spec.rotation)
+        oMf, ids = data.oMf, self.plan.frame_ids
+        for link, nodes_h, axes in self._placement_constants:
+            H = oMf[ids[link]].homogeneous[:3]  # [R | p]
+            out[link] = NodePlacement(nodes_h @ H.T, H[:, :3] @ axes)
         return out
+
+    @property
+    def _placement_constants(self) -> tuple:
+        """Per beam: its link, nodes with a column of ones (N+1, 4) and the beam axes (3, 3)."""
+        cached = self.__dict__.get("_placement_cache")
+        if cached is None:
+            rows = []
+            for link, bp in self.plan.beams.items():
+                nodes_h = np.hstack([bp.nodes, np.ones((bp.nodes.shape[0], 1))])
+                nodes_h.setflags(write=False)
+                rows.append((link, nodes_h, bp.spec.rotation))
+            cached = tuple(rows)
+            self.__dict__["_placement_cache"] = cached
+        return cached
 
     def pose_terms_and_placements(
         self, q: np.ndarray
@@ -357,17 +371,17 @@ class FlexibleModel:
         if not self.nv:
             return self.pose_terms(q[None])
         model, data = self.model, self.data
-        pin.computeJointJacobians(model, data, self.pin_configuration(q))
+        qrel = self.coord_map @ q
+        pin.computeJointJacobians(model, data, self._configuration_of(qrel))
         names, cols, A0, A1, A2, plain = self._rodrigues
         jac = {}
+        ids, cmap, local = self.plan.frame_ids, self.coord_map, pin.LOCAL
         for link in self.plan.carriers:
-            J = pin.getFrameJacobian(model, data, self.plan.frame_ids[link], pin.LOCAL)
-            J = J.reshape(6, -1)  # (6,) for one joint
-            jac[link] = (J if plain else J @ self.coord_map)[None]
-        qrel = self.coord_map @ q
+            J = pin.getFrameJacobian(model, data, ids[link], local).reshape(1, 6, -1)
+            jac[link] = J if plain else J @ cmap  # (6,) for one joint: reshaped
         rot, slide = {}, {}
         if names:  # as pose_terms, one pose
-            angle = qrel[cols][:, None, None]
+            angle = qrel[cols].reshape(-1, 1, 1)
             R = A0 + np.sin(angle) * A1 + (1.0 - np.cos(angle)) * A2
             for i, name in enumerate(names):
                 rot[name] = R[i : i + 1]
@@ -484,7 +498,10 @@ class FlexibleModel:
 
     def pin_configuration(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio configuration vector (nq,) of user coordinates."""
-        qv = self.pin_q(np.asarray(q, dtype=float))
+        return self._configuration_of(self.pin_q(np.asarray(q, dtype=float)))
+
+    def _configuration_of(self, qv: np.ndarray) -> np.ndarray:
+        """Pinocchio configuration vector (nq,) of Pinocchio joint values (nv,)."""
         if self.model.nq == self.nv:  # no continuous joint: the values in Pinocchio's order
             return qv[self._pin_order] if self._pin_order is not None else qv
         out = np.zeros(self.model.nq)

@@ -34,6 +34,7 @@ eigensolver of the same size.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -222,29 +223,55 @@ def _twist_at(att: _Attach, root, alg, nx: int):
     return out
 
 
+def _one_pose_joints(model, plan: SolvePlan) -> tuple:
+    """Per joint, the constants :func:`root_twists_one` uses (cached per model, read-only).
+
+    ``(const, P)``: the attachment's constant part placed on all ``nx`` columns (6, nx) or
+    None, and the joint's projection as its two diagonal 3 × 3 blocks (2, 3, 3), times
+    ``R_oᵀ`` for joints whose rotation is constant.
+    """
+    cached = model.__dict__.get("_one_pose_joints")
+    if cached is not None:
+        return cached
+    out = []
+    for j, att in zip(model.plan.joints, plan.joint_attach):
+        const = None
+        if att.const is not None:
+            const = np.zeros((6, plan.nx))
+            const[:, att.start : att.stop] = att.const
+            const.setflags(write=False)
+        P = np.stack([j.proj[:3, :3], j.proj[3:, 3:]])
+        if j.kind != "revolute":
+            P = P @ j.R_o.T
+        P.setflags(write=False)
+        out.append((const, P))
+    cached = tuple(out)
+    model.__dict__["_one_pose_joints"] = cached
+    return cached
+
+
 def root_twists_one(model, plan: SolvePlan, terms) -> dict:
     """:func:`root_twists` of one pose (b = 1), without the algebra indirection."""
     nx = plan.nx
     twist: dict = {model.plan.root: None}
-    for j, att in zip(model.plan.joints, plan.joint_attach):
+    for j, att, (const, P) in zip(model.plan.joints, plan.joint_attach,
+                                  _one_pose_joints(model, plan)):
         e = twist[j.parent]
-        if e is None and att.const is None:
-            twist[j.child] = None
-            continue
-        tau = np.zeros((6, nx)) if e is None else att.lin @ e[0]
-        if att.const is not None:
-            tau[:, att.start : att.stop] += att.const
+        if e is None:
+            if const is None:
+                twist[j.child] = None
+                continue
+            tau = const
+        else:
+            tau = att.lin @ e[0]
+            if const is not None:
+                tau[:, att.start : att.stop] += att.const
         if j.kind == "prismatic":
             tau = tau + offset_block(terms.slide[j.name])[0] @ tau
-            RT = j.R_o.T
         elif j.kind == "revolute":
-            RT = terms.rot[j.name][0].T
-        else:
-            RT = j.R_o.T
-        out = np.empty((6, nx))
-        out[:3] = RT @ tau[:3]
-        out[3:] = RT @ tau[3:]
-        twist[j.child] = (j.proj @ out)[None]
+            P = P @ terms.rot[j.name][0].T  # projection after the joint's rotation
+        # the two 3-row halves (translation, rotation) each turned and projected
+        twist[j.child] = (P @ tau.reshape(2, 3, nx)).reshape(1, 6, nx)
     return twist
 
 
@@ -466,18 +493,23 @@ class OnePoseLayout:
     plan order) and ``A_el`` its elastic part (without the frame-twist columns);
     ``X = A_el[x rows]`` gives the nodal coordinates ``x``; ``node_links`` names the beam of
     each 3-row block of ``A2``'s rows and ``node_slices`` the blocks of each beam in ``A``.
+    ``F`` holds the same rows in the order one product serves them: ``X`` first, then per
+    beam its rows of ``A`` and of ``A_el`` together (``field_rows[link] = (start, stop)``, the
+    ``A`` half first), so that one product ``F Z`` gives the nodal coordinates and every
+    beam's fields, and one rotation per beam turns both halves.
     """
 
     __slots__ = ("S0", "W0", "beams", "inertias", "masses", "design_diag", "design_cols",
-                 "A2", "X", "node_links", "node_slices")
+                 "A2", "X", "node_links", "node_slices", "F", "field_rows")
 
     def __init__(self, S0, W0, beams, inertias, masses, design_diag, design_cols, A2, X,
-                 node_links, node_slices):
+                 node_links, node_slices, F, field_rows):
         self.S0, self.W0 = S0, W0
         self.beams, self.inertias, self.masses = beams, inertias, masses
         self.design_diag, self.design_cols = design_diag, design_cols
         self.A2, self.X = A2, X
         self.node_links, self.node_slices = node_links, node_slices
+        self.F, self.field_rows = F, field_rows
 
 
 def one_pose_layout(model) -> OnePoseLayout | None:
@@ -548,12 +580,19 @@ def one_pose_layout(model) -> OnePoseLayout | None:
     X = A_el[x_index]
     A2 = np.concatenate([A, A_el])
     links = np.array(node_links + node_links, dtype=int)
-    for a in (S0, W0, A2, X, links):
+    blocks, field_rows = [X], {}
+    f = nx
+    for link, (n0, n1) in node_slices.items():
+        blocks += [A[3 * n0 : 3 * n1], A_el[3 * n0 : 3 * n1]]
+        field_rows[link] = (f, f + 6 * (n1 - n0))
+        f += 6 * (n1 - n0)
+    F = np.ascontiguousarray(np.concatenate(blocks))
+    for a in (S0, W0, A2, X, links, F):
         a.setflags(write=False)
     layout = OnePoseLayout(S0, W0, tuple(beams), tuple(inertias), tuple(masses),
                            np.concatenate(diag) if diag else np.zeros(0, int),
                            np.concatenate(cols) if cols else np.zeros(0, int),
-                           A2, X, links, node_slices)
+                           A2, X, links, node_slices, F, field_rows)
     model.__dict__["_one_pose_layout"] = layout
     return layout
 
@@ -795,13 +834,13 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
         rigid-coordinate response.
     """
     import scipy.linalg
-    from scipy.linalg import lapack
+    from scipy.linalg import blas, lapack
 
     nx = model.nx
     k = nx if n_modes is None else min(int(n_modes), nx)
     nd = M.shape[-1]
-    # condense as condense() does, through LAPACK directly (one pose: the wrappers' checks
-    # cost more than these small factorizations)
+    # condense as condense() does, through LAPACK/BLAS directly (one pose: the wrappers'
+    # checks cost more than these small factorizations); Bred's lower triangle only
     Lq = Y = None
     Bred = M[:nx, :nx]
     if model.nv:
@@ -812,24 +851,26 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
                 "add inertia to the links it drives"
             )
         Y, info = lapack.dtrtrs(Lq, M[nx:, :nx], lower=1)
-        Bred = Bred - Y.T @ Y
+        Bred = blas.dsyrk(-1.0, Y, beta=1.0, c=Bred, trans=1, lower=1)  # Mww - Y^T Y
     if k == 0:
         return np.zeros(0), np.zeros((nd, 0)), np.zeros((nd, 0))
     if use_lanczos(nx, k):
-        mu, V = _lanczos(Bred, k, True)
+        mu, V = _lanczos(np.tril(Bred) + np.tril(Bred, -1).T, k, True)
     elif k == nx:
         mu, V, info = lapack.dsyevd(Bred, compute_v=1, lower=1)
         if info != 0:
             raise EigenSolverError("the symmetric eigensolver did not converge: the mass of the "
                                    "model is not finite")
     else:
-        mu, V = scipy.linalg.eigh(Bred, subset_by_index=[nx - k, nx - 1], driver="evr",
-                                  check_finite=False)
+        mu, V = scipy.linalg.eigh(Bred, lower=True, subset_by_index=[nx - k, nx - 1],
+                                  driver="evr", check_finite=False)
     mu, V = mu[::-1], V[:, ::-1]
-    if not np.isfinite(mu).all():
+    if not math.isfinite(mu.sum()):  # a NaN or inf makes the sum one (then checked in full)
         _finite(mu)
-    ok = mu > 64.0 * _EPS * max(abs(mu[0]), abs(mu[-1]))  # as resolved(): mu is sorted
-    r = k if ok.all() else int(np.argmin(ok))
+    top, low = float(mu[0]), float(mu[-1])
+    # as resolved(): mu is sorted, so the smallest decides whether all are above the noise
+    r = k if low > 64.0 * _EPS * max(abs(top), abs(low)) else int(np.argmin(
+        mu > 64.0 * _EPS * max(abs(top), abs(low))))
     phi_w = V[:, :r] / np.sqrt(mu[:r])
     shapes_w = np.empty((nd, r))
     shapes_w[:nx] = phi_w
