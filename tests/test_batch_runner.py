@@ -252,6 +252,25 @@ def test_a_task_that_kills_its_workers_is_recorded_once(tmp_path):
     assert rows[1].status == "ok"
 
 
+def test_a_run_with_no_live_worker_stops_with_a_named_error(tmp_path):
+    """Pending tasks and no worker for the timeout: BatchError, not a silent hang."""
+    from distributed import LocalCluster
+
+    from pinflex.batch.runner import Task, run_tasks
+    from pinflex.exceptions import BatchError
+
+    task = Task("t", ((1, 0, "h"),), os.getpid, (), "prbdm")
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        with ResultStore(tmp_path / "s.db") as store:
+            t0 = time.perf_counter()
+            with pytest.raises(BatchError, match="no Dask worker has been alive for 2 s"):
+                run_tasks(store, [task], planned=1, skipped=0,
+                          scheduler=cluster.scheduler_address, progress=False,
+                          no_workers_timeout_s=2.0)
+            assert time.perf_counter() - t0 < 30.0
+            assert list(store.rows()) == []
+
+
 def test_progress_bar_reports_rate_and_eta():
     """The bar shows done/total, percent, a rate and an ETA that reaches zero at the end."""
     import io

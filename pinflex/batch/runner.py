@@ -157,7 +157,8 @@ def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: 
               scheduler: str | None = None, workers: int | None = None,
               retry_failed: bool = False, progress: bool = True, label: str = "batch",
               max_in_flight: int | None = None,
-              preload: Sequence[str] = ()) -> BatchSummary:
+              preload: Sequence[str] = (),
+              no_workers_timeout_s: float | None = -1.0) -> BatchSummary:
     """Run tasks on Dask and write their rows to the store as they complete.
 
     Args:
@@ -175,11 +176,22 @@ def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: 
             keeps workers busy and the client's memory bounded.
         preload: Modules every worker imports before the clock starts (so the first tasks'
             imports do not count in the rate).
+        no_workers_timeout_s: How long the run may go on with tasks pending and no worker
+            alive before it stops with a :class:`BatchError` (rows already written stay in
+            the store; rerunning resumes). The default (-1) means 300 s for the local cluster,
+            whose nanny restarts workers that die, and no limit for an external scheduler,
+            to which workers may be added later; None means no limit.
 
     Returns:
         The run's summary.
+
+    Raises:
+        BatchError: If no worker is alive for ``no_workers_timeout_s`` while tasks are
+            pending (for example when every worker keeps dying at start-up).
     """
     summary = BatchSummary(planned=planned, skipped=skipped)
+    if no_workers_timeout_s is not None and no_workers_timeout_s < 0:
+        no_workers_timeout_s = None if scheduler else 300.0
     if not tasks:
         return summary
     from distributed import as_completed
@@ -220,7 +232,8 @@ def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: 
         pending = as_completed()
         top_up(pending)
         try:
-            for future in pending:
+            while not pending.is_empty():
+                future = _next_completed(pending, client, no_workers_timeout_s)
                 task = owner.pop(future.key)
                 try:
                     rows = future.result()
@@ -249,6 +262,28 @@ def run_tasks(store: ResultStore, tasks: Sequence[Task], planned: int, skipped: 
     if summary.tasks:
         summary.stage_s = {k: v / summary.tasks for k, v in stage_sum.items()}
     return summary
+
+
+def _next_completed(pending, client, no_workers_timeout_s: float | None):
+    """The next finished future; a BatchError if no worker lives for the timeout."""
+    idle_since: float | None = None
+    checked = time.perf_counter()
+    while not pending.has_ready():
+        time.sleep(0.02)
+        now = time.perf_counter()
+        if no_workers_timeout_s is None or now - checked < 1.0:
+            continue
+        checked = now
+        if client.nthreads():
+            idle_since = None
+        elif idle_since is None:
+            idle_since = now
+        elif now - idle_since > no_workers_timeout_s:
+            raise BatchError(
+                f"no Dask worker has been alive for {no_workers_timeout_s:g} s while "
+                f"{pending.count()} task(s) wait; the rows finished so far are in the store "
+                "(rerun the same command to resume)")
+    return pending.next()
 
 
 def _add_stages(acc: dict[str, float], rows: list[dict]) -> None:
