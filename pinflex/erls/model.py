@@ -141,6 +141,24 @@ class FlexibleModel:
         coordinates: str | None = None,
         joints=None,
     ):
+        """Build the ERLS model of a description (arguments as in the class docstring).
+
+        Args:
+            description: A :class:`RobotDescription` or the path of an annotated URDF.
+            planar: Keep only in-plane elastic dofs (a bool).
+            values: ``{name: value}`` of parameters [their units] and point masses [kg].
+            coordinates: ``'relative'``, ``'absolute'`` or None (the description's choice).
+            joints: Joint conditions: ``'free'`` (None), ``'locked'``, ``'annotated'`` or
+                ``{joint: 'free' | 'locked' | stiffness}``.
+
+        Raises:
+            DesignVariableNotFound: A name in ``values`` is neither a parameter nor a point
+                mass.
+            DesignVariableOutOfBounds: A value in ``values`` leaves its bounds.
+            ConfigurationError: ``planar`` is not a bool, or ``coordinates`` is unknown.
+            InvalidDescription: Pinocchio cannot load the URDF, or a joint has more than one
+                degree of freedom.
+        """
         if not isinstance(description, RobotDescription):
             description = load(description)
         values = dict(values or {})
@@ -266,6 +284,16 @@ class FlexibleModel:
         """Set the nominal value of a point mass [kg].
 
         Parameters are set when the model is built (``FlexibleModel(..., values={...})``).
+
+        Args:
+            name: Name of a point mass of the description.
+            value: Its new nominal mass [kg], one finite number; a design mass must stay
+                within its bounds, any mass must be >= 0.
+
+        Raises:
+            ConfigurationError: ``name`` is a parameter, or ``value`` is not one finite number.
+            DesignVariableNotFound: No point mass has this name.
+            DesignVariableOutOfBounds: ``value`` is outside the design bounds or negative.
         """
         if name in self.description.parameters:
             raise ConfigurationError(
@@ -356,6 +384,14 @@ class FlexibleModel:
 
         One kinematics pass serves both (the frame placements follow from the joint placements
         the Jacobians were computed with).
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m], already checked by
+                :meth:`check_q` (not validated again).
+
+        Returns:
+            ``(terms, placements)``: :class:`PoseTerms` with leading axis 1 and
+            ``{link: NodePlacement}`` as :meth:`node_placements`.
         """
         if not self.nv:
             return self.pose_terms(q[None]), self.node_placements(q)
@@ -367,6 +403,13 @@ class FlexibleModel:
         """:meth:`pose_terms` of one checked pose (nv,), leading axis 1, without the batch loop.
 
         Leaves ``self.data`` at this pose (joint placements and Jacobians).
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m], already checked.
+
+        Returns:
+            :class:`PoseTerms`: ``jac`` ``{link: (1, 6, nv)}``, ``rot`` ``{joint: (1, 3, 3)}``,
+            ``slide`` ``{prismatic joint: (1, 3)}`` [m].
         """
         if not self.nv:
             return self.pose_terms(q[None])
@@ -411,6 +454,16 @@ class FlexibleModel:
         Accepts one value per moving joint (length ``nv``, the user convention) or a Pinocchio
         configuration vector (length ``nq``, which differs from ``nv`` when the arm has
         continuous joints, stored as ``(cos θ, sin θ)``); see :meth:`from_configuration`.
+
+        Args:
+            q: One pose (nv,) or many (n, nv) in the user convention [rad or m], or Pinocchio
+                configurations (nq,) or (n, nq) when ``nq != nv``.
+
+        Returns:
+            Float array (nv,) or (n, nv) of user coordinates [rad or m].
+
+        Raises:
+            ConfigurationError: Not numbers, non-finite values, or a wrong shape.
         """
         q = require_array(q, "joint values q")
         if q.ndim in (1, 2) and q.shape[-1] == self.model.nq != self.nv:
@@ -432,6 +485,12 @@ class FlexibleModel:
         (-π, π]; other joints copy their value. The relative joint values are then mapped to
         the model's user convention (``q_user = C⁻¹ q_rel``, the identity for relative
         coordinates). Inverse of :meth:`pin_configuration` up to multiples of 2π.
+
+        Args:
+            qpin: Pinocchio configuration vectors, (nq,) or (n, nq) [rad, m, or cos/sin].
+
+        Returns:
+            User coordinates (nv,) or (n, nv) [rad or m].
 
         Raises:
             ConfigurationError: Wrong length, non-finite values, or a (cos, sin) pair whose
@@ -461,7 +520,21 @@ class FlexibleModel:
         return np.linalg.solve(self.coord_map, qrel[..., None])[..., 0]
 
     def check_y(self, y, *, bounds: bool = True) -> np.ndarray:
-        """Validate design values (ny,) or per-pose (n, ny); ``None`` gives the nominal ones."""
+        """Validate design values (ny,) or per-pose (n, ny); ``None`` gives the nominal ones.
+
+        Args:
+            y: Design values [kg] (ny,) or (n, ny), a ``{name: value}`` dict (missing names
+                take their nominal values), or ``None`` for :attr:`y0`.
+            bounds: Check every value against its design bounds (tolerance 1e-12).
+
+        Returns:
+            Float array (ny,) or (n, ny) [kg].
+
+        Raises:
+            DesignVariableNotFound: A dict key is not a design variable.
+            ConfigurationError: Not numbers, non-finite values, or a wrong shape.
+            DesignVariableOutOfBounds: ``bounds`` is set and a value leaves its bounds.
+        """
         if y is None:
             return self.y0
         if isinstance(y, dict):
@@ -485,7 +558,17 @@ class FlexibleModel:
         return y
 
     def joint_index(self, name: str) -> int:
-        """Index of a moving joint in the coordinate vector."""
+        """Index of a moving joint in the coordinate vector.
+
+        Args:
+            name: Name of a moving joint (one of :attr:`joint_names`).
+
+        Returns:
+            Its column in the user coordinates (nv,), Pinocchio's velocity order.
+
+        Raises:
+            JointNotFound: No moving joint has this name.
+        """
         if name not in self.joint_names:
             from pinflex.exceptions import JointNotFound
 
@@ -493,11 +576,25 @@ class FlexibleModel:
         return self.joint_names.index(name)
 
     def pin_q(self, q: np.ndarray) -> np.ndarray:
-        """Pinocchio joint values (nv,) of user coordinates (relative angles)."""
+        """Pinocchio joint values (nv,) of user coordinates (relative angles).
+
+        Args:
+            q: User coordinates (nv,) of one pose [rad or m]; not validated.
+
+        Returns:
+            Relative (Pinocchio) joint values ``C q`` (nv,) [rad or m].
+        """
         return self.coord_map @ q
 
     def pin_configuration(self, q: np.ndarray) -> np.ndarray:
-        """Pinocchio configuration vector (nq,) of user coordinates."""
+        """Pinocchio configuration vector (nq,) of user coordinates.
+
+        Args:
+            q: User coordinates (nv,) of one pose [rad or m]; not validated.
+
+        Returns:
+            Configuration (nq,) in Pinocchio's order, continuous joints as ``(cos θ, sin θ)``.
+        """
         return self._configuration_of(self.pin_q(np.asarray(q, dtype=float)))
 
     def _configuration_of(self, qv: np.ndarray) -> np.ndarray:
@@ -531,7 +628,17 @@ class FlexibleModel:
 
     # ------------------------------------------------------------------ assembly
     def pose_terms(self, Q: np.ndarray) -> PoseTerms:
-        """Pinocchio Jacobians and joint rotations at poses Q (n, nv)."""
+        """Pinocchio Jacobians and joint rotations at poses Q (n, nv).
+
+        Args:
+            Q: Checked joint coordinates (n, nv) in the user convention [rad or m]; not
+                validated (use :meth:`check_q` first).
+
+        Returns:
+            :class:`PoseTerms`: ``jac`` ``{carrier link: (n, 6, nv)}`` LOCAL frame Jacobians
+            over the user coordinates, ``rot`` ``{revolute joint: (n, 3, 3)}`` child-in-parent
+            rotations, ``slide`` ``{prismatic joint: (n, 3)}`` child origin offsets [m].
+        """
         model, data = self.model, self.data
         n = Q.shape[0]
         jac = {link: np.zeros((n, 6, self.nv)) for link in self.plan.carriers}
@@ -585,8 +692,16 @@ class FlexibleModel:
 
         Works on any algebra ``alg`` (poses or Taylor coefficients on the leading axis).
 
+        Args:
+            terms: Pose terms of ``b`` poses (:meth:`pose_terms`) or their jets.
+            alg: The algebra of the leading axis (:class:`BatchAlgebra` for poses, a jet
+                algebra for Taylor coefficients).
+
         Returns:
-            ``M0`` (b, nd, nd), ``Mdesign`` (ny, b, nd, nd), ``K`` (b, nd, nd).
+            ``M0`` (b, nd, nd), ``Mdesign`` (ny, b, nd, nd), ``K`` (b, nd, nd) after the joint
+            conditions are applied, so ``nd = ndof`` (the modal coordinates ``[x; q_kept]``).
+            Units: mass entries [kg, kg m, kg m²], stiffness [N/m, N, N m] per coordinate
+            pair; ``Mdesign`` is per kg of each design mass.
         """
         nx = self.nx
         nd = nx + self.nv  # [x; q_all]; joint conditions map to the modal coordinates
@@ -689,7 +804,17 @@ class FlexibleModel:
         return (M[0], K[0]) if single else (M, K)
 
     def matrices_from_terms(self, terms: PoseTerms, y: np.ndarray, n_poses: int):
-        """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs."""
+        """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs.
+
+        Args:
+            terms: Pose terms of the poses (:meth:`pose_terms`), leading axis ``n_poses``.
+            y: Design values checked by :meth:`check_y`, (ny,) or (n_poses, ny) [kg].
+            n_poses: Number of poses on the leading axis.
+
+        Returns:
+            ``(M, K)``, each (n_poses, ndof, ndof), with the design masses and design
+            stiffness channels added.
+        """
         M0, Md, K = self.assemble(terms, BatchAlgebra(n_poses))
         M = add_design_masses(M0, Md, y)
         return design_channels.add_to(self, terms, y, M, K, n_poses)
@@ -719,6 +844,15 @@ class FlexibleModel:
 
         The identity when no joint is locked; the rows of a locked joint give its coordinate
         as the parent attachment's elastic motion along the joint axis.
+
+        Args:
+            q: Joint coordinates (nv,) of one pose in the user convention [rad or m].
+
+        Returns:
+            ``T`` (nx + nv, ndof), dimensionless.
+
+        Raises:
+            ConfigurationError: Invalid ``q`` or more than one pose.
         """
         q = self.check_q(q)
         if q.ndim != 1:
@@ -729,7 +863,19 @@ class FlexibleModel:
         return np.eye(self.ndof) if T is None else T[0]
 
     def full_shapes(self, q, shapes: np.ndarray) -> np.ndarray:
-        """Shapes over the modal coordinates (ndof, k) as ``[x; q_all]`` (nx + nv, k)."""
+        """Shapes over the modal coordinates (ndof, k) as ``[x; q_all]`` (nx + nv, k).
+
+        Args:
+            q: Joint coordinates (nv,) of the pose the shapes belong to [rad or m].
+            shapes: Mode shapes (ndof, k) over the modal coordinates ``[x; q_kept]``.
+
+        Returns:
+            ``T shapes`` (nx + nv, k) (see :meth:`joint_transform`); ``shapes`` itself when
+            every joint is free.
+
+        Raises:
+            ConfigurationError: Invalid ``q`` (only checked when some joint is not free).
+        """
         return shapes if self._joints_plain else self.joint_transform(q) @ shapes
 
     def relative_motion_rows(self, q) -> np.ndarray:
@@ -737,6 +883,15 @@ class FlexibleModel:
 
         ``r_j = (C q)_j − aᵀθ_parent``: the motion between the parent's deformed attachment
         and the child along the joint axis [rad or m] (see :mod:`pinflex.erls.joints`).
+
+        Args:
+            q: Joint coordinates (nv,) of one pose in the user convention [rad or m].
+
+        Returns:
+            ``G`` (nv, nx + nv), rows in :attr:`joint_names` order.
+
+        Raises:
+            ConfigurationError: Invalid ``q`` or more than one pose.
         """
         q = self.check_q(q)
         if q.ndim != 1:
@@ -772,7 +927,20 @@ class FlexibleModel:
         return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds)
 
     def eigvals_from(self, M: np.ndarray, K: np.ndarray) -> np.ndarray:
-        """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof)."""
+        """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof).
+
+        Args:
+            M: Mass matrices (..., ndof, ndof) over the modal coordinates, e.g. from
+                :meth:`matrices`.
+            K: Stiffness matrices of the same shape.
+
+        Returns:
+            Eigenvalues (..., n_elastic) ascending [rad²/s²]; ``f = √λ / 2π`` [Hz].
+
+        Raises:
+            EigenSolverError: A singular mass matrix or a non-positive elastic eigenvalue
+                (an unrestrained structure).
+        """
         return modal.eigvals_from(self, M, K)
 
     def modes(self, q, y=None, *, n_modes: int | None = None, check_bounds=True):
@@ -812,6 +980,12 @@ class FlexibleModel:
 
     def check_n_modes(self, n_modes):
         """``n_modes`` checked: None, or an int >= 1 (capped at the number of modes).
+
+        Args:
+            n_modes: Requested number of lowest modes, or None for all.
+
+        Returns:
+            None, or ``min(n_modes, n_elastic)``.
 
         Raises:
             NoFlexibleLink: The model has no non-rigid mode (no beam and no joint spring).
