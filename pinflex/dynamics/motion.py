@@ -25,6 +25,15 @@ class JointMotion:
     """
 
     def __init__(self, trajectory):
+        """Fit the rest-to-rest quintic spline through the samples.
+
+        Args:
+            trajectory: A :class:`~pinflex.Trajectory` (``times_s`` (n,) [s] increasing,
+                ``q`` (n, nv) [rad or m]).
+
+        Raises:
+            InvalidTrajectory: Fewer than 2 samples.
+        """
         t = np.asarray(trajectory.times_s, dtype=float)
         q = np.asarray(trajectory.q, dtype=float)
         if t.size < 2:
@@ -62,7 +71,15 @@ class JointMotion:
         return self._spline(t), self._d1(t), self._d2(t)
 
     def sample(self, times: np.ndarray):
-        """``(q, q̇, q̈)`` at many times, each (n, nv)."""
+        """``(q, q̇, q̈)`` at many times, each (n, nv).
+
+        Args:
+            times: Times (n,) [s]; outside the samples the joints rest at the first or hold
+                the last sample (zero velocity and acceleration).
+
+        Returns:
+            ``(q, qd, qdd)``, each (n, nv): [rad or m], [rad/s or m/s], [rad/s² or m/s²].
+        """
         times = np.asarray(times, dtype=float)
         tc = np.clip(times, self.t0, self.t1)
         q, qd, qdd = self._spline(tc), self._d1(tc), self._d2(tc)

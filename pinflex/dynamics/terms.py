@@ -99,6 +99,19 @@ class ErlsDynamics:
     """
 
     def __init__(self, model, y=None, *, gravity=None):
+        """Set up the carriers of ``model`` for design ``y`` (see the class docstring).
+
+        Args:
+            model: The :class:`~pinflex.FlexibleModel`.
+            y: Design values (ny,) [kg], a ``{name: kg}`` dict, or None for the nominal ones.
+            gravity: Gravity acceleration (3,) in world axes [m/s²], or None for zero.
+
+        Raises:
+            ConfigurationError: ``y`` is not one design vector, or ``gravity`` is not 3 finite
+                numbers.
+            DesignVariableNotFound: A dict key of ``y`` is not a design variable.
+            DesignVariableOutOfBounds: A design value leaves its bounds.
+        """
         self.model = model
         self.y = model.check_y(y)
         if self.y.ndim != 1:
@@ -182,6 +195,15 @@ class ErlsDynamics:
         ``W = [E, S]`` (n, 3, ndof); ``Sdot_k`` (nv, n, 3, nv) with ``Σ_k q̇_k Sdot_k q̇`` the
         ERLS acceleration at q̈ = 0. Used by the tests to check ``Ṡ`` against finite differences
         of the point positions along a motion.
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m]; not validated.
+
+        Returns:
+            ``{link: (W, Sdot_k, R, c)}`` for every link carrying translational material
+            points, ``n`` the number of its points: ``W`` (n, 3, ndof) in link axes [m per
+            unit coordinate], ``Sdot_k`` (nv, n, 3, nv), ``R`` (3, 3) the link rotation in the
+            world frame and ``c`` (n, 3) the points' positions in the link frame [m].
         """
         J, Jd, R, e, ed = self._kinematics(np.asarray(q, dtype=float))
         out = {}
@@ -192,7 +214,18 @@ class ErlsDynamics:
 
     # ------------------------------------------------------------------ terms
     def linear_terms(self, q):
-        """``M(q)``, ``C_k(q)`` (nv, ndof, ndof), ``K(q)``, ``F(q)``; ``C(q, q̇) = Σ q̇_k C_k``."""
+        """``M(q)``, ``C_k(q)`` (nv, ndof, ndof), ``K(q)``, ``F(q)``; ``C(q, q̇) = Σ q̇_k C_k``.
+
+        Over every coordinate ``[x; q_all]`` (``ndof = nx + nv``).
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m]; not validated.
+
+        Returns:
+            ``(M, Ck, K, F)``: mass matrix (ndof, ndof), velocity matrices per unit joint
+            velocity (nv, ndof, ndof), stiffness matrix (ndof, ndof) (beams and joint springs)
+            and generalized gravity force (ndof,) [N, N m].
+        """
         q = np.asarray(q, dtype=float)
         self._q_last = q
         J, Jd, R, e, ed = self._kinematics(q)
@@ -225,7 +258,16 @@ class ErlsDynamics:
         return M, Ck, self._stiffness(e), F
 
     def terms(self, q, qd) -> EomTerms:
-        """``M, C, K, F`` of eq. (1) at joint coordinates ``q`` and velocities ``q̇`` (user)."""
+        """``M, C, K, F`` of eq. (1) at joint coordinates ``q`` and velocities ``q̇`` (user).
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m]; not validated.
+            qd: Joint velocities (nv,) [rad/s or m/s].
+
+        Returns:
+            :class:`EomTerms` with ``M``, ``C = Σ q̇_k C_k``, ``K`` (ndof, ndof) and ``F``
+            (ndof,).
+        """
         M, Ck, K, F = self.linear_terms(q)
         C = np.tensordot(np.asarray(qd, dtype=float), Ck, axes=(0, 0))
         return EomTerms(M=M, C=C, K=K, F=F)
@@ -251,6 +293,13 @@ class ErlsDynamics:
         the physical joint motion: a motor turns its joint by ``q_pin,j − aᵀθ_parent`` (the
         joint-axis component of the parent attachment's elastic rotation, or translation for a
         prismatic joint), so ``q_user = C⁻¹ (q_pin,phys + A_pin x)`` and ``A = C⁻¹ A_pin``.
+
+        Args:
+            q: Joint coordinates (nv,) in the user convention [rad or m]; not validated.
+
+        Returns:
+            ``(A, Adot)``: ``A`` (nv, nx) and ``Adot`` (nv, nv, nx), ``Adot[k]`` the rate of
+            ``A`` per unit velocity of joint ``k``.
         """
         model = self.model
         Cm = model.coord_map
@@ -282,6 +331,18 @@ class ErlsDynamics:
 
         Returns a function of ``q`` giving ``(Tw, Sw)``, each with rows (translation, rotation)
         in WORLD axes: ``Tw`` (6, nx), ``Sw`` (6, nv).
+
+        Args:
+            link: Name of the link carrying the point.
+            xyz: Position (3,) of the point in the link frame [m] (default: the link origin).
+
+        Returns:
+            ``at(q)``: a function of joint coordinates (nv,) [rad or m] returning
+            ``(Tw, Sw)``, translation rows [m per unit coordinate], rotation rows [rad per
+            unit coordinate].
+
+        Raises:
+            LinkNotFound: ``link`` is not a link of the description.
         """
         model = self.model
         model.description.require_link(link)
