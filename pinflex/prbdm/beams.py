@@ -144,23 +144,55 @@ class Planform:
         return int(self.x_m.size - 2)
 
     def width_m(self, s: np.ndarray | float) -> np.ndarray:
-        """Full width w(s) at abscissae s [m]."""
+        """Full width w(s) at abscissae s [m].
+
+        Args:
+            s: Abscissae along the beam axis from the root, a number or an array of any shape [m];
+                linear interpolation between vertices.
+
+        Returns:
+            Width [m], the shape of ``s``.
+        """
         return 2.0 * np.interp(s, self.x_m, self.half_width_m)
 
     def thickness_at(self, s: np.ndarray | float) -> np.ndarray:
-        """Thickness t(s) at abscissae s [m]."""
+        """Thickness t(s) at abscissae s [m].
+
+        Args:
+            s: Abscissae along the beam axis from the root, a number or an array of any shape [m];
+                linear interpolation between vertices.
+
+        Returns:
+            Thickness [m], the shape of ``s`` (constant without a thickness profile).
+        """
         if self.thickness_profile_m is None:
             return np.full(np.shape(s), float(self.thickness_m))
         return np.interp(s, self.x_m, self.thickness_profile_m)
 
     def area_m2(self, s: np.ndarray | float) -> np.ndarray:
-        """Cross-section area A(s) = w(s) t(s) [m^2]."""
+        """Cross-section area A(s) = w(s) t(s) [m^2].
+
+        Args:
+            s: Abscissae along the beam axis from the root, a number or an array of any shape [m];
+                linear interpolation between vertices.
+
+        Returns:
+            Area [m^2], the shape of ``s``.
+        """
         if self.thickness_profile_m is None:
             return self.width_m(s) * self.thickness_m
         return self.width_m(s) * self.thickness_at(s)
 
     def area_moment_m4(self, s: np.ndarray | float) -> np.ndarray:
-        """Out-of-plane bending second moment of area I(s) = w(s) t(s)^3 / 12 [m^4]."""
+        """Out-of-plane bending second moment of area I(s) = w(s) t(s)^3 / 12 [m^4].
+
+        Args:
+            s: Abscissae along the beam axis from the root, a number or an array of any shape [m];
+                linear interpolation between vertices.
+
+        Returns:
+            Second moment of area [m^4], the shape of ``s``.
+        """
         if self.thickness_profile_m is None:
             return self.width_m(s) * self.thickness_m**3 / 12.0
         return self.width_m(s) * self.thickness_at(s) ** 3 / 12.0

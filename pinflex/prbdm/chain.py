@@ -154,6 +154,17 @@ def chain_frequencies(chain: PrbdmChain, theta: np.ndarray | None = None,
 
     Solves the symmetric generalized problem :math:`K\phi = \omega^2 M(\theta)\phi` with
     ``scipy.linalg.eigh`` (M is positive definite at every pose; no pseudo-inverse).
+
+    Args:
+        chain: The chain (n spring joints).
+        theta: Joint angles (n,) [rad]; None for the straight pose (all zeros).
+        data: Pinocchio data of ``chain.model`` to reuse (default: a new one).
+
+    Returns:
+        Frequencies (n,) ascending [Hz].
+
+    Raises:
+        ConfigurationError: ``theta`` is not n finite angles.
     """
     m = mass_matrix(chain, theta, data)
     eigval = sla.eigh(chain.stiffness_matrix, m, eigvals_only=True)
@@ -319,6 +330,14 @@ def to_urdf(chain: PrbdmChain, name: str = "prbdm") -> str:
 
     Plain URDF parsers (Pinocchio's included) ignore the unknown element, so the file loads
     unchanged; the joint ``<dynamics>`` element is left at zero damping.
+
+    Args:
+        chain: The chain to write (link masses [kg], inertias [kg m^2], stiffnesses
+            [N m/rad]).
+        name: The robot name of the URDF.
+
+    Returns:
+        The URDF text (links ``link_0`` .. ``link_n`` and ``tip``, revolute joints about y).
     """
     model = chain.model
     lines = ['<?xml version="1.0"?>', f"<robot name={quoteattr(name)}>",

@@ -143,11 +143,30 @@ class PrbdmFit:
         return out
 
     def to_json(self, indent: int | None = None) -> str:
-        """JSON text of :meth:`to_dict` (NaN written as null)."""
+        """JSON text of :meth:`to_dict` (NaN written as null).
+
+        Args:
+            indent: Indentation passed to :func:`json.dumps` (None: one line).
+
+        Returns:
+            The JSON text.
+        """
         return json.dumps(_nan_to_none(self.to_dict()), indent=indent)
 
     def chain(self, planform: Planform) -> PrbdmChain:
-        """Pinocchio chain of the fitted model (static stiffness)."""
+        """Pinocchio chain of the fitted model (static stiffness).
+
+        Args:
+            planform: The beam the fit was made for (its mass and inertia go to the links).
+
+        Returns:
+            :class:`PrbdmChain` with the fitted link fractions (n + 1,) and spring
+            stiffnesses (n,) [N m/rad].
+
+        Raises:
+            InvalidChain: The stored fractions or stiffnesses are not a valid chain.
+            InvalidBeam: The planform cannot carry an nR chain (depth taper or zero tip width).
+        """
         return build_chain(planform, np.array(self.link_fractions), np.array(self.stiffness))
 
 
