@@ -39,7 +39,21 @@ class TrajectoryExpansion:
     estimate: float | None = None
 
     def evaluate(self, Q, *, quantity: str = "freq_hz") -> np.ndarray:
-        """Values at the trajectory's own samples Q (ns, nv), each from its segment's model."""
+        """Values at the trajectory's own samples Q (ns, nv), each from its segment's model.
+
+        Args:
+            Q: The joint samples (ns, nv) the expansion was built on, user convention
+                [rad or m]; sample ``i`` is evaluated by the model of the segment holding
+                ``i`` (radius warnings off).
+            quantity: ``'freq_hz'`` (default, [Hz]) or ``'eigval'`` ([rad²/s²]).
+
+        Returns:
+            Values (ns, k).
+
+        Raises:
+            ConfigurationError: ``Q`` has the wrong number of joint values, or ``quantity``
+                is unknown.
+        """
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         out: np.ndarray | None = None
         for tm, (a, b) in zip(self.models, self.segments):
@@ -196,7 +210,15 @@ class SampledTaylor:
     _var: list[int] = field(init=False, repr=False, compare=False)
 
     def values(self, y=None) -> np.ndarray:
-        """Polynomial values (ns, k) at the samples for design ``y`` [kg] (default y0)."""
+        """Polynomial values (ns, k) at the samples for design ``y`` [kg] (default y0).
+
+        Args:
+            y: Design values (ny,) over all design variables [kg] (only the expanded ones are
+                read, not validated); None for ``y0``.
+
+        Returns:
+            Values (ns, k) in the unit of the sampled quantity ([Hz] or [rad²/s²]).
+        """
         if self.space_y is None or y is None:
             return self.G[0]
         dy = [float(y[j]) - float(self.y0[j]) for j in self.design_idx]
@@ -223,7 +245,22 @@ class SampledTaylor:
 
 def sample(tm: TaylorModel, Q, *, quantity: str = "freq_hz",
            linear_in_design: bool = False) -> SampledTaylor:
-    """Fix the joint samples of a Taylor model (see :class:`SampledTaylor`)."""
+    """Fix the joint samples of a Taylor model (see :class:`SampledTaylor`).
+
+    Args:
+        tm: The Taylor model.
+        Q: Joint samples (nv,) or (ns, nv), user convention [rad or m]; joints that are not
+            expanded must stay at ``tm.q0``.
+        quantity: ``'freq_hz'`` (default, [Hz]) or ``'eigval'`` ([rad²/s²]).
+        linear_in_design: Keep only the terms of degree <= 1 in the design variables.
+
+    Returns:
+        :class:`SampledTaylor` with ``G`` (nβ, ns, k), a polynomial in the design offsets only.
+
+    Raises:
+        ConfigurationError: ``Q`` has the wrong shape or moves a joint that is not expanded,
+            or ``quantity`` is unknown.
+    """
     coef = tm.coefficients(quantity, linear_in_design=bool(linear_in_design))  # (ncoef, k)
     nj, nd = len(tm.joint_idx), len(tm.design_idx)
     mi = tm.space.multi_indices

@@ -19,14 +19,34 @@ class JetAlgebra:
     """Taylor coefficients on the leading axis (see :class:`pinflex.erls.BatchAlgebra`)."""
 
     def __init__(self, space: JetSpace):
+        """Algebra of the jets of ``space``.
+
+        Args:
+            space: The jet space (variables and truncation order) of every operand.
+        """
         self.space = space
 
     def const(self, c: np.ndarray) -> np.ndarray:
-        """Jet of a constant array."""
+        """Jet of a constant array.
+
+        Args:
+            c: The constant, any shape.
+
+        Returns:
+            Jet (ncoef, *c.shape) with only the constant coefficient set.
+        """
         return jets.constant(self.space, c)
 
     def mm(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Truncated product of two matrix jets."""
+        """Truncated product of two matrix jets.
+
+        Args:
+            a: Jet (ncoef, ..., n, m).
+            b: Jet (ncoef, ..., m, r), or (ncoef, m) for a vector.
+
+        Returns:
+            Jet of ``a @ b`` (ncoef, ..., n, r), truncated at the space's order.
+        """
         return jets.matmul(self.space, a, b)
 
 

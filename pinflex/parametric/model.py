@@ -119,7 +119,17 @@ class TaylorModel:
         return self.space.order
 
     def jet(self, quantity: str = "eigval") -> np.ndarray:
-        """Coefficients of λ (``eigval``, [rad²/s²]) or of the frequency (``freq_hz``, [Hz])."""
+        """Coefficients of λ (``eigval``, [rad²/s²]) or of the frequency (``freq_hz``, [Hz]).
+
+        Args:
+            quantity: ``'eigval'`` (default) or ``'freq_hz'``.
+
+        Returns:
+            The jet (ncoef, k): one row per monomial of :attr:`space`, one column per mode.
+
+        Raises:
+            ConfigurationError: ``quantity`` is neither name.
+        """
         if quantity == "eigval":
             return self.eigval_jets
         if quantity == "freq_hz" and self.freq_jets is not None:
@@ -127,7 +137,24 @@ class TaylorModel:
         raise ConfigurationError(f"quantity='{quantity}': expected 'eigval' or 'freq_hz'")
 
     def offsets(self, Q, Y=None, *, warn: bool = True) -> np.ndarray:
-        """Offsets (n, nvars) of samples from the expansion point; checks fixed joints."""
+        """Offsets (n, nvars) of samples from the expansion point; checks fixed joints.
+
+        Args:
+            Q: Joint coordinates of the samples, (nv,) or (n, nv), user convention
+                [rad or m]; joints that are not expanded must stay at ``q0`` (to 1e-12).
+            Y: Design values [kg], (ny,) or (n, ny), over all design variables (only the
+                expanded ones are read); None keeps them at ``y0``.
+            warn: Run :meth:`check_radius` on the offsets (warns
+                :class:`TaylorRadiusWarning` beyond the estimated tolerance).
+
+        Returns:
+            Offsets (n, nvars): expanded joints first [rad or m], then expanded design
+            variables [kg].
+
+        Raises:
+            ConfigurationError: ``Q`` has the wrong shape, or moves a joint that is not
+                expanded.
+        """
         Q = np.asarray(Q, dtype=float)
         if Q.ndim == 1:
             Q = Q[None]
@@ -240,6 +267,13 @@ class TaylorModel:
 
         The estimate is :meth:`error_estimate` along each sample's own direction from the
         expansion point, so joint and design offsets are judged together.
+
+        Args:
+            dx: Offsets (n, nvars) from the expansion point (:meth:`offsets`).
+            tol: Largest acceptable estimated relative error (default 1e-2).
+            quantity: ``'eigval'`` or ``'freq_hz'``: whose series is judged.
+            mon: Monomials of ``dx`` when the caller has them.
+            strict: Raise instead of warning :class:`TaylorRadiusWarning`.
 
         Raises:
             TaylorRadiusExceeded: ``strict`` and some sample is beyond the estimated radius or
@@ -358,6 +392,14 @@ class TaylorModel:
 
     def linear_parts(self, Q, *, quantity: str = "eigval"):
         """Values of l_{i,0}(q) and l_{i,j}(q) of eq. (9) at samples.
+
+        Args:
+            Q: Joint coordinates (nv,) or (n, nv) of the samples, user convention [rad or m].
+            quantity: ``'eigval'`` ([rad²/s²], per kg for ``L``) or ``'freq_hz'`` ([Hz]).
+
+        Raises:
+            ConfigurationError: The model expands no design variable, ``Q`` has the wrong
+                shape or moves a joint that is not expanded, or ``quantity`` is unknown.
 
         Returns:
             ``(l0, L)``: l0 (n, k) and L (n, k, ny_expanded), so that
