@@ -45,6 +45,24 @@ def exact_cost(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[T
 
     ``M`` is affine in the point masses, so the matrices are assembled once per pose and only
     the eigenproblems are solved per design.
+
+    Args:
+        model: The flexible model.
+        trajectory: Joint samples in the model's user coordinates (``times_s`` (ns,) [s],
+            ``q`` (ns, nv) [rad or m]).
+        targets: Desired frequency histories (1-based ``mode``, ``freq_hz`` [Hz], ``weight``).
+        Y: Designs (n, ny) [kg] (one design (ny,) is taken as n = 1); not bound-checked.
+        quantity: ``'freq_hz'`` (cost on frequency errors [Hz²·s]) or ``'eigval'`` (on
+            eigenvalue errors [(rad²/s²)²·s]); the cost is trapezoidal in time.
+
+    Returns:
+        ``(costs, errors)``, each (n,): the cost (10) and the largest relative frequency error
+        ``|f/f* − 1|`` over targets and samples (dimensionless).
+
+    Raises:
+        ConfigurationError: Invalid joint samples, or a target that is not positive
+            frequencies.
+        EigenSolverError: A design makes the eigenproblem singular or unrestrained.
     """
     Q = model.check_q(trajectory.q)
     ns = Q.shape[0]
@@ -84,6 +102,22 @@ def brute_force(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[
     Each zoom level re-grids ``points`` per variable over ±2 spacings around the current best
     (clipped to the bounds), so the final spacing is ``range / (points − 1) · (4 / (points −
     1))^zoom_levels``.
+
+    Args:
+        model: The flexible model (at most three design variables, finite upper bounds).
+        trajectory: Joint samples in the model's user coordinates (``times_s`` (ns,) [s],
+            ``q`` (ns, nv) [rad or m]).
+        targets: Desired frequency histories (1-based ``mode``, ``freq_hz`` [Hz], ``weight``).
+        points: Grid points per variable and level (``points ** ny`` designs per level).
+        zoom_levels: Number of zoomed re-grids after the first grid.
+        quantity: ``'freq_hz'`` or ``'eigval'``, as for :func:`exact_cost`.
+
+    Returns:
+        :class:`BruteForceResult`: the designs [kg] of least cost and of least largest error,
+        their values, the number of designs evaluated and the final spacing (ny,) [kg].
+
+    Raises:
+        ConfigurationError: An infinite upper bound or more than three design variables.
     """
     lo = np.array([d.lower for d in model.design])
     hi = np.array([d.upper for d in model.design])

@@ -152,6 +152,11 @@ def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> Non
 
     The samples are converted to Pinocchio's joint values, which the limits refer to, and
     checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off).
+
+    Args:
+        model: The flexible model whose URDF holds the limits [rad or m].
+        trajectory: Joint samples (ns, nv) in the model's user coordinates, one value per
+            moving joint (not checked here).
     """
     joints = [model.description.joints[name] for name in model.joint_names]
     in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
@@ -315,7 +320,24 @@ def design_region(model: FlexibleModel, Q: np.ndarray, y0: np.ndarray,
 
 def exact_errors(model: FlexibleModel, Q: np.ndarray, y: np.ndarray,
                  targets: Sequence[Target], modes: Sequence[int]):
-    """Exact frequencies (ns, len(modes)) [Hz] and the largest relative target error."""
+    """Exact frequencies (ns, len(modes)) [Hz] and the largest relative target error.
+
+    Args:
+        model: The flexible model.
+        Q: Joint samples (ns, nv), user convention [rad or m].
+        y: Design values (ny,) [kg].
+        targets: Desired frequency histories; each target's ``mode`` must be in ``modes``.
+        modes: 1-based mode numbers to compute.
+
+    Returns:
+        ``(f, error)``: frequencies (ns, len(modes)) [Hz] and
+        ``max |f/f* − 1|`` over targets and samples (dimensionless).
+
+    Raises:
+        ConfigurationError: Invalid ``Q`` or ``y``, or a target that is not positive
+            frequencies.
+        DesignVariableOutOfBounds: ``y`` leaves its bounds.
+    """
     f = model.frequencies(Q, y, n_modes=max(modes))[:, [m - 1 for m in modes]]
     tgt = target_matrix(targets, Q.shape[0])
     cols = [list(modes).index(t.mode) for t in targets]

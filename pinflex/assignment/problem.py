@@ -90,12 +90,27 @@ class AssignmentQP:
         return self.lower, self.upper
 
     def cost(self, dy: np.ndarray) -> float:
-        """Exact value of the cost (10) at ``dy`` (shape (ny,))."""
+        """Exact value of the cost (10) at ``dy`` (shape (ny,)).
+
+        Args:
+            dy: Design step δy (ny,) from the expansion design [kg].
+
+        Returns:
+            ``½ δyᵀRδy + hᵀδy + c`` (units of the cost: [Hz²·s] for frequency targets).
+        """
         dy = np.asarray(dy, dtype=float)
         return float(0.5 * dy @ self.R @ dy + self.h @ dy + self.c)
 
     def max_violation(self, dy: np.ndarray) -> float:
-        """Largest violation of any constraint at ``dy`` (0 if feasible), in each row's units."""
+        """Largest violation of any constraint at ``dy`` (0 if feasible), in each row's units.
+
+        Args:
+            dy: Design step δy (ny,) from the expansion design [kg].
+
+        Returns:
+            The largest violation of the box [kg], the equalities and the inequalities (each
+            in its row's units), 0.0 when all hold.
+        """
         dy = np.asarray(dy, dtype=float)
         parts = [np.maximum(self.lower - dy, 0.0), np.maximum(dy - self.upper, 0.0)]
         if self.A.shape[0]:
