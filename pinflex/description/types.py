@@ -202,18 +202,44 @@ class RobotDescription:
     values: dict[str, float] = field(default_factory=dict)
 
     def with_values(self, values: dict[str, float]) -> RobotDescription:
-        """The same description with parameter values overridden (re-read from its text)."""
+        """The same description with parameter values overridden (re-read from its text).
+
+        Args:
+            values: ``{parameter: value}`` in each parameter's own unit; merged over the
+                values this description was read with.
+
+        Returns:
+            A new :class:`RobotDescription` parsed from the same URDF text.
+
+        Raises:
+            DesignVariableOutOfBounds: A value leaves its parameter's bounds.
+            InvalidBeamProperty: The new values make a beam's section or material invalid.
+        """
         from pinflex.description.parse import parse
 
         merged = {**self.values, **{k: float(v) for k, v in values.items()}}
         return parse(self.urdf_xml, base_dir=self.base_dir, values=merged)
 
     def require_link(self, name: str) -> None:
-        """Raise :class:`LinkNotFound` unless ``name`` is a link."""
+        """Raise :class:`LinkNotFound` unless ``name`` is a link.
+
+        Args:
+            name: A link name.
+
+        Raises:
+            LinkNotFound: ``name`` is not a link of the description.
+        """
         if name not in self.links:
             raise LinkNotFound(name, self.links)
 
     def require_joint(self, name: str) -> None:
-        """Raise :class:`JointNotFound` unless ``name`` is a joint."""
+        """Raise :class:`JointNotFound` unless ``name`` is a joint.
+
+        Args:
+            name: A joint name.
+
+        Raises:
+            JointNotFound: ``name`` is not a joint of the description.
+        """
         if name not in self.joints:
             raise JointNotFound(name, self.joints)

@@ -126,7 +126,19 @@ class Beam:
             )
 
     def element(self, link: str) -> ET.Element:
-        """The ``<pinflex:flexible>`` element declaring ``link`` as this beam."""
+        """The ``<pinflex:flexible>`` element declaring ``link`` as this beam.
+
+        Args:
+            link: Name of the link the beam replaces.
+
+        Returns:
+            The element, with ``<pinflex:material>`` [Pa, kg/m^3 or kg/m] and
+            ``<pinflex:section>`` [m^2, m^4] children.
+
+        Raises:
+            InvalidBeamProperty: ``elements`` is not an integer.
+            InvalidDescription: ``tip`` or ``normal`` is not three numbers.
+        """
         el = ET.Element(_NS + "flexible", {"link": link, "elements": str(int(self.elements))})
         if int(self.elements) != self.elements:
             raise InvalidBeamProperty(f"Beam.elements must be an integer, got {self.elements!r}")
@@ -163,7 +175,18 @@ class Mass:
     upper: float = math.inf
 
     def element(self, name: str) -> ET.Element:
-        """The ``<pinflex:point_mass>`` element of this mass under ``name``."""
+        """The ``<pinflex:point_mass>`` element of this mass under ``name``.
+
+        Args:
+            name: Name of the point mass (and of its design variable).
+
+        Returns:
+            The element with ``mass`` [kg], ``xyz`` [m] and, for a design mass, ``lower`` and
+            ``upper`` [kg].
+
+        Raises:
+            InvalidDescription: ``xyz`` is not three numbers.
+        """
         attrs = {
             "name": name,
             "link": self.link,

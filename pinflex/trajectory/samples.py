@@ -163,6 +163,13 @@ class Trajectory:
         """Write ``t, <joint names...>`` with 17 significant digits (exact round trip).
 
         The file is written atomically (:func:`pinflex.outputs.atomic_path`).
+
+        Args:
+            path: File to write; times in [s], joint values in the trajectory's convention
+                [rad or m].
+
+        Raises:
+            OutputError: ``path`` is a folder or cannot be written.
         """
         from pinflex.outputs import atomic_path
 
