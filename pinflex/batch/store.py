@@ -159,6 +159,15 @@ class ResultStore:
     """
 
     def __init__(self, path: str | Path, timeout_s: float = 60.0):
+        """Open (or create) the store and check its schema version.
+
+        Args:
+            path: File of the store; created with its parent folder if missing.
+            timeout_s: How long a write waits for another connection's lock [s].
+
+        Raises:
+            StoreError: The file is not a usable SQLite store or has another schema version.
+        """
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         try:
@@ -188,7 +197,13 @@ class ResultStore:
         self.close()
 
     def add_config(self, config_hash: str, kind: str, config: dict) -> None:
-        """Record a configuration under its hash (no-op if already there)."""
+        """Record a configuration under its hash (no-op if already there).
+
+        Args:
+            config_hash: Hash identifying the configuration (the ``config_hash`` of rows).
+            kind: Kind of study the configuration belongs to.
+            config: The configuration, JSON-serialisable; stored as canonical JSON.
+        """
         self._db.execute("INSERT OR IGNORE INTO configs VALUES (?, ?, ?)",
                          (config_hash, kind, canonical_json(config)))
 
@@ -198,7 +213,14 @@ class ResultStore:
                 for h, k, c in self._db.execute("SELECT config_hash, kind, config FROM configs")}
 
     def finished_keys(self, include_failed: bool = True) -> set[Key]:
-        """Keys that a rerun skips: every stored row, or only the ``ok`` ones."""
+        """Keys that a rerun skips: every stored row, or only the ``ok`` ones.
+
+        Args:
+            include_failed: Also return the keys of ``failed`` rows (default True).
+
+        Returns:
+            ``{(seed, item, config_hash)}``.
+        """
         sql = "SELECT seed, item, config_hash FROM results"
         if not include_failed:
             sql += " WHERE status = 'ok'"
@@ -258,7 +280,16 @@ class ResultStore:
         return tuple(out)
 
     def rows(self, kind: str | None = None, status: str | None = None) -> Iterator[Row]:
-        """Stored rows ordered by key, optionally of one kind and status."""
+        """Stored rows ordered by key, optionally of one kind and status.
+
+        Args:
+            kind: Only rows of this kind (None: every kind).
+            status: Only rows of this status (None: every status).
+
+        Returns:
+            An iterator of :class:`Row`, JSON fields decoded, ordered by
+            ``(config_hash, seed, item)``.
+        """
         where, args = [], []
         if kind is not None:
             where.append("kind = ?")
@@ -283,7 +314,14 @@ class ResultStore:
             f"SELECT {', '.join(_COLUMNS)} FROM results ORDER BY seed, item, config_hash"))
 
     def count(self, status: str | None = None) -> int:
-        """Number of stored rows, optionally of one status."""
+        """Number of stored rows, optionally of one status.
+
+        Args:
+            status: Only count rows of this status (None: every row).
+
+        Returns:
+            The number of rows.
+        """
         if status is None:
             return int(self._db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
         return int(self._db.execute("SELECT COUNT(*) FROM results WHERE status = ?",
