@@ -176,7 +176,15 @@ class ModelPlan:
         return self.links[0]
 
     def nodes(self, link: str) -> np.ndarray:
-        """Node positions (N+1, 3) of a flexible link in its link frame [m]."""
+        """Node positions (N+1, 3) of a flexible link in its link frame [m].
+
+        Args:
+            link: Name of a flexible link (a key of :attr:`beams`); any other name raises
+                ``KeyError``.
+
+        Returns:
+            Node positions (N+1, 3) [m], N the number of elements.
+        """
         return self.beams[link].nodes
 
 
@@ -199,10 +207,22 @@ class BatchAlgebra:
     """Plain arrays with a leading pose axis."""
 
     def __init__(self, size: int):
+        """Algebra of arrays with ``size`` poses on the leading axis.
+
+        Args:
+            size: Number of poses ``b`` on the leading axis.
+        """
         self.size = size
 
     def const(self, c: np.ndarray) -> np.ndarray:
-        """Lift a constant array."""
+        """Lift a constant array.
+
+        Args:
+            c: The constant, any shape.
+
+        Returns:
+            A read-only broadcast view (size, *c.shape).
+        """
         return np.broadcast_to(c, (self.size,) + c.shape)
 
     @staticmethod

@@ -146,13 +146,29 @@ class JetSpace:
         return int(self.pair_a.size)
 
     def degree_slice(self, degree: int) -> slice:
-        """Slice of the coefficients of one degree ``|α| = degree``."""
+        """Slice of the coefficients of one degree ``|α| = degree``.
+
+        Args:
+            degree: Total degree, 0 <= degree <= order.
+
+        Returns:
+            The slice of the coefficient axis (length ``ncoef``) holding that degree.
+
+        Raises:
+            ValueError: ``degree`` is outside 0..order.
+        """
         if not 0 <= degree <= self.order:
             raise ValueError(f"degree {degree} is outside 0..{self.order}")
         return slice(int(self.degree_offsets[degree]), int(self.degree_offsets[degree + 1]))
 
     def position(self, alpha: Sequence[int]) -> int:
         """Coefficient position of the multi-index ``alpha``.
+
+        Args:
+            alpha: Multi-index, one non-negative exponent per variable (length ``nvars``).
+
+        Returns:
+            Its index on the coefficient axis, in ``0..ncoef - 1``.
 
         Raises:
             ValueError: ``alpha`` has the wrong length, a negative entry or ``|α| > order``.
