@@ -35,7 +35,20 @@ def robot_data_dir() -> Path:
 
 
 def resolve_base(base: str, folder: Path) -> Path:
-    """Path of an overlay's base URDF: ``example-robot-data:<path in robots/>`` or a file."""
+    """Path of an overlay's base URDF: ``example-robot-data:<path in robots/>`` or a file.
+
+    Args:
+        base: The overlay's ``base`` attribute: ``example-robot-data:<path>`` or a file path,
+            relative paths taken from ``folder``.
+        folder: Folder of the overlay file.
+
+    Returns:
+        The resolved path of an existing file.
+
+    Raises:
+        InvalidDescription: ``base`` is empty, the file does not exist, or
+            example-robot-data is needed and not installed.
+    """
     if not base:
         raise InvalidDescription("<pinflex:overlay> needs a base=\"...\" URDF")
     if base.startswith(ROBOT_DATA_PREFIX):
@@ -59,6 +72,17 @@ def apply_overlay(base_xml: str, overlay: ET.Element) -> str:
 
     The returned text is the base URDF with the annotations as extra children of ``<robot>``
     (what an annotated URDF would contain), so Pinocchio still parses it.
+
+    Args:
+        base_xml: Text of the base URDF.
+        overlay: The parsed ``<pinflex:overlay>`` element; its children are moved to the
+            base and its ``name`` attribute, if any, renames the robot.
+
+    Returns:
+        The annotated URDF text.
+
+    Raises:
+        InvalidDescription: ``base_xml`` is not well-formed XML.
     """
     ET.register_namespace("pinflex", NAMESPACE)
     try:

@@ -191,7 +191,14 @@ def _vec(text: str | None, default: str, what: str) -> np.ndarray:
 
 
 def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
-    """Rotation matrix of URDF roll-pitch-yaw angles (R = Rz(y) Ry(p) Rx(r))."""
+    """Rotation matrix of URDF roll-pitch-yaw angles (R = Rz(y) Ry(p) Rx(r)).
+
+    Args:
+        rpy: ``(roll, pitch, yaw)`` (3,) [rad] about the fixed x, y, z axes.
+
+    Returns:
+        Rotation matrix (3, 3).
+    """
     r, p, y = rpy
     cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
     return np.array(
