@@ -149,7 +149,14 @@ class ModesPreview:
     info: dict = field(default_factory=dict)
 
     def select(self, mode: int) -> None:
-        """Play mode ``mode`` in the viewer (offline, served or a user's viewer)."""
+        """Play mode ``mode`` in the viewer (offline, served or a user's viewer).
+
+        Args:
+            mode: A mode number of :attr:`modes` (1 = lowest non-rigid).
+
+        Raises:
+            ConfigurationError: ``mode`` is not in this preview.
+        """
         if mode not in self.modes:
             raise ConfigurationError(f"mode {mode} is not in this preview {list(self.modes)}")
         i = self.modes.index(mode)
@@ -157,7 +164,14 @@ class ModesPreview:
         describe_window(self.viewer, title=f"pinflex: mode {mode}", caption=self.captions[i])
 
     def html(self, initial: int | None = None) -> str:
-        """The offline page with the selector; ``initial`` is the mode shown first."""
+        """The offline page with the selector; ``initial`` is the mode shown first.
+
+        Args:
+            initial: Mode number shown first (default: the first of :attr:`modes`).
+
+        Returns:
+            A self-contained HTML page.
+        """
         page = self.viewer.static_html()
         options = "".join(
             f'<option value="{i}">{m}: {f:.2f} Hz</option>'
@@ -174,7 +188,18 @@ class ModesPreview:
         return page[:k] + block + page[k:]
 
     def write_html(self, path: str | Path, initial: int | None = None) -> Path:
-        """Write :meth:`html` atomically (folders are created); returns the path."""
+        """Write :meth:`html` atomically (folders are created); returns the path.
+
+        Args:
+            path: HTML file to write.
+            initial: Mode number shown first (default: the first of :attr:`modes`).
+
+        Returns:
+            ``Path(path)``.
+
+        Raises:
+            OutputError: ``path`` is a folder or cannot be written.
+        """
         from pinflex.outputs import write_text
 
         return write_text(path, self.html(initial), "HTML preview")

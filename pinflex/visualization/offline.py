@@ -136,7 +136,13 @@ class OfflineWindow:
         self.legend: dict | None = None
 
     def send(self, command) -> None:
-        """Apply a meshcat command (``SetObject``, ``SetTransform``, ...) to the scene tree."""
+        """Apply a meshcat command (``SetObject``, ``SetTransform``, ...) to the scene tree.
+
+        Args:
+            command: A ``meshcat.commands`` object with a ``lower()`` method; a
+                ``set_animation`` command replaces the recorded animation, ``delete`` removes
+                a node (the whole scene for the root path).
+        """
         import umsgpack
         from meshcat.servers.tree import find_node
 

@@ -56,7 +56,17 @@ class Preview:
         return self.viewer.static_html()
 
     def write_html(self, path: str | Path) -> Path:
-        """Write :meth:`html` to ``path`` atomically (folders are created); return the path."""
+        """Write :meth:`html` to ``path`` atomically (folders are created); return the path.
+
+        Args:
+            path: HTML file to write.
+
+        Returns:
+            ``Path(path)``.
+
+        Raises:
+            OutputError: ``path`` is a folder or cannot be written.
+        """
         from pinflex.outputs import write_text
 
         return write_text(path, self.html(), "HTML preview")
@@ -220,7 +230,23 @@ def trajectory_preview(
 
 def mode_preview_html(model: FlexibleModel, q, path: str | Path, mode: int = 1,
                       **kwargs) -> Path:
-    """Write :func:`mode_preview` as a static HTML page; returns the path."""
+    """Write :func:`mode_preview` as a static HTML page; returns the path.
+
+    Args:
+        model: The flexible model.
+        q: Pose (nv,) in user coordinates [rad or m].
+        path: HTML file to write.
+        mode: Mode number, 1 for the lowest non-rigid mode.
+        **kwargs: ``y``, ``amplitude_m``, ``frames``, ... as for :func:`mode_preview`.
+
+    Returns:
+        ``Path(path)``.
+
+    Raises:
+        ConfigurationError: Invalid pose, a mode that does not exist, or fewer than 4 frames.
+        MissingDependency: meshcat is not installed.
+        OutputError: ``path`` is a folder or cannot be written.
+    """
     return mode_preview(model, q, mode, **kwargs).write_html(path)
 
 

@@ -78,6 +78,16 @@ class MeshcatServer:
     """
 
     def __init__(self, zmq_url: str | None = None, timeout_s: float = 30.0):
+        """Start the server and wait for its URLs.
+
+        Args:
+            zmq_url: zmq address for the server to bind (default: meshcat picks a free port).
+            timeout_s: How long to wait for the server to print its URLs [s].
+
+        Raises:
+            ViewerServerError: The server cannot start, exits at start-up, or prints no URL
+                within ``timeout_s``.
+        """
         args = [sys.executable, "-u", "-m", "meshcat.servers.zmqserver"]
         if zmq_url is not None:
             args += ["--zmq-url", zmq_url]
@@ -139,7 +149,12 @@ class MeshcatServer:
         return self.process.poll() is None
 
     def close(self, timeout_s: float = 5.0) -> None:
-        """Stop the server (SIGTERM, then SIGKILL after ``timeout_s``) and reap it."""
+        """Stop the server (SIGTERM, then SIGKILL after ``timeout_s``) and reap it.
+
+        Args:
+            timeout_s: How long to wait after SIGTERM before SIGKILL [s]. A no-op when the
+                server has already exited.
+        """
         _SERVERS.discard(self)
         if self.process.poll() is not None:
             return
@@ -165,6 +180,16 @@ def served_visualizer(zmq_url: str | None = None):
     With ``zmq_url`` it connects to a server that is already running; otherwise it starts a
     :class:`MeshcatServer` (drained output, stopped on exit and SIGTERM), available as
     ``vis.window.pinflex_server``. No browser is opened.
+
+    Args:
+        zmq_url: zmq address of a running meshcat server, or None to start one.
+
+    Returns:
+        A ``meshcat.Visualizer``.
+
+    Raises:
+        MissingDependency: meshcat is not installed.
+        ViewerServerError: A new server cannot be started.
     """
     from pinflex.visualization.offline import require_meshcat
 

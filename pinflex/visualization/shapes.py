@@ -45,7 +45,14 @@ class Centreline:
     radius_m: float
 
     def at(self, scale: float) -> np.ndarray:
-        """Station positions (n_st, 3) [m] with the mode drawn at ``scale``."""
+        """Station positions (n_st, 3) [m] with the mode drawn at ``scale``.
+
+        Args:
+            scale: Factor on :attr:`displacement_m` (0 gives the rest positions).
+
+        Returns:
+            World positions (n_st, 3) [m].
+        """
         return self.positions_m + scale * self.displacement_m
 
 
@@ -193,7 +200,16 @@ class CameraView:
     fov_deg: float = 75.0
 
     def project(self, points_m: np.ndarray, width: int, height: int) -> np.ndarray:
-        """Pixel coordinates (column, row) of world points in a ``width × height`` image."""
+        """Pixel coordinates (column, row) of world points in a ``width × height`` image.
+
+        Args:
+            points_m: World points (n, 3) or one point (3,) [m].
+            width: Image width [px].
+            height: Image height [px] (the field of view is vertical).
+
+        Returns:
+            Pixel coordinates (n, 2) [px], column from the left, row from the top.
+        """
         p = np.atleast_2d(points_m) - self.centre_m
         fwd = -self.eye_m / np.linalg.norm(self.eye_m)
         right = np.cross(fwd, [0.0, 0.0, 1.0])
