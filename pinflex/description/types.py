@@ -213,7 +213,7 @@ class RobotDescription:
 
         Raises:
             DesignVariableOutOfBounds: A value leaves its parameter's bounds.
-            InvalidBeamProperty: The new values make a beam's section or material invalid.
+            InvalidDescription: A value is not finite.
         """
         from pinflex.description.parse import parse
 

@@ -51,8 +51,7 @@ class TrajectoryExpansion:
             Values (ns, k).
 
         Raises:
-            ConfigurationError: ``Q`` has the wrong number of joint values, or ``quantity``
-                is unknown.
+            ConfigurationError: ``Q`` has the wrong number of joint values.
         """
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         out: np.ndarray | None = None

@@ -149,7 +149,7 @@ class TaylorModel:
 
         Returns:
             Offsets (n, nvars): expanded joints first [rad or m], then expanded design
-            variables [kg].
+            variables (in their own units, [kg] for point masses).
 
         Raises:
             ConfigurationError: ``Q`` has the wrong shape, or moves a joint that is not
@@ -395,7 +395,8 @@ class TaylorModel:
 
         Args:
             Q: Joint coordinates (nv,) or (n, nv) of the samples, user convention [rad or m].
-            quantity: ``'eigval'`` ([rad²/s²], per kg for ``L``) or ``'freq_hz'`` ([Hz]).
+            quantity: ``'eigval'`` ([rad²/s²]; ``L`` per unit of each design variable) or
+                ``'freq_hz'`` ([Hz]).
 
         Raises:
             ConfigurationError: The model expands no design variable, ``Q`` has the wrong
