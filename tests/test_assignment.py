@@ -182,3 +182,16 @@ def test_cli_assign_json(tmp_path, capsys):
     assert out["modes"][0]["mode"] == 1 and len(out["modes"][0]["after_hz"]) == 152
     assert out["active_constraints"] == [] or isinstance(out["active_constraints"], list)
     assert (tmp_path / "charts" / "assignment.csv").is_file()
+
+
+def test_trajectory_limit_check_names_a_wrong_joint_count():
+    """Samples with the wrong number of columns: a named error, not a NumPy shape error."""
+    from pinflex.assignment import check_trajectory_limits
+    from pinflex.exceptions import InvalidTrajectory
+
+    model = FlexibleModel(TWO_LINK, planar=True)
+    bad = Trajectory(np.array([0.0, 1.0]), np.zeros((2, 3)), ("a", "b", "c"))
+    with pytest.raises(InvalidTrajectory, match=r"\(n_samples, 2\)"):
+        check_trajectory_limits(model, bad)
+    check_trajectory_limits(model, Trajectory(np.array([0.0, 1.0]),
+                                              np.array([[1.7, 5.1], [1.8, 5.2]]), ("q1", "q2")))

@@ -48,6 +48,7 @@ from pinflex.exceptions import (
     AssignmentNotImproved,
     AssignmentWarning,
     ConfigurationError,
+    InvalidTrajectory,
     ModeCrossingWarning,
 )
 from pinflex.parametric import TaylorModel, expand
@@ -156,8 +157,16 @@ def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> Non
     Args:
         model: The flexible model whose URDF holds the limits [rad or m].
         trajectory: Joint samples (ns, nv) in the model's user coordinates, one value per
-            moving joint (not checked here).
+            moving joint.
+
+    Raises:
+        InvalidTrajectory: If the samples do not have one column per joint of the model.
     """
+    q = np.asarray(trajectory.q)
+    if q.ndim != 2 or q.shape[1] != len(model.joint_names):
+        raise InvalidTrajectory(
+            f"the trajectory has samples of shape {q.shape}; the model needs (n_samples, "
+            f"{len(model.joint_names)}): one column per joint {list(model.joint_names)}")
     joints = [model.description.joints[name] for name in model.joint_names]
     in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
     in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
