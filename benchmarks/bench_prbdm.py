@@ -591,6 +591,8 @@ def main() -> None:
     args = parser.parse_args()
     if args.quick:
         args.starts = min(args.starts, 3)
+    if args.outdir:
+        os.makedirs(args.outdir, exist_ok=True)
     for name in args.sections:
         if name == "truth":
             section_truth()
