@@ -31,6 +31,8 @@ Public API:
   arrays (any symmetric generalized eigenproblem sampled along a path), for callers that have
   their own eigenpairs.
 * :func:`mac_matrix` ``(phi_a, phi_b, mass=None)``: MAC of every column pair.
+* :func:`solver_eigenpairs` and :class:`PoseMap`: the solver-coordinate eigenpairs and the
+  map between the coordinates of two samples (``track(..., pose_map=)``).
 
 Both trackers return a :class:`ModeTracking`:
 
@@ -60,6 +62,16 @@ Mode numbers are non-rigid modes, 1 = lowest. Shapes of a :class:`FlexibleModel`
 elastic coordinates (beam axes of each link, so they change smoothly with the pose) with the
 rigid coordinates condensed out, mass-normalised with the condensed mass matrix — the same
 reduced problem as :meth:`~pinflex.erls.FlexibleModel.frequencies`.
+
+Where the conditioned solve (:mod:`pinflex.erls.solve`) covers the model, the eigenpairs come
+from it (:func:`solver_eigenpairs`: one batched symmetric eigensolve of the condensed
+solver-coordinate mass per sample, no nodal matrices): its coordinates ``w`` map to the nodal
+ones by ``x = T(q) w`` with ``T`` depending on the pose, so a shape is compared with another
+sample's only after :class:`PoseMap` has expressed it in that sample's coordinates
+(``T(q_t)⁻¹ T(q_s) φ``, per link with a constant 6-column map). The MACs are then the nodal
+ones (equal to round-off), so crossings, veering and ambiguous steps are decided exactly as
+on the nodal pencil; comparing the unmoved solver vectors instead would not be (benchmark A:
+0.990 between neighbouring samples where the shapes agree to 0.99999).
 """
 
 from __future__ import annotations
@@ -75,8 +87,10 @@ from pinflex.exceptions import ConfigurationError, EigenSolverError
 __all__ = [
     "ModeEvent",
     "ModeTracking",
+    "PoseMap",
     "eigenpairs",
     "mac_matrix",
+    "solver_eigenpairs",
     "track",
     "track_modes",
 ]
@@ -221,6 +235,116 @@ def eigenpairs(model, Q, y=None, *, n_modes: int | None = None, check_bounds: bo
     return lam, shapes, Mred
 
 
+class PoseMap:
+    """Shapes of one pose in the solver coordinates of another pose (same nodal shape).
+
+    A conditioned solve (:mod:`pinflex.erls.solve`) works in relative, scaled element
+    coordinates ``w``; the nodal coordinates are ``x = T(q) w``, where ``T(q)`` is constant on
+    each link's own columns and depends on the pose only through the elastic twist of each
+    link root (its upstream links' tips turned by the joints). A shape ``φ`` of sample ``s``
+    is the nodal shape ``T(q_s) φ``; :meth:`move` returns ``u = T(q_t)⁻¹ T(q_s) φ``, that same
+    nodal shape in the coordinates of sample ``t``. With ``B_t`` the condensed mass of sample
+    ``t`` in those coordinates, ``uᵀ B_t v`` equals the nodal-coordinate product with the
+    condensed nodal mass of ``t`` (``B = Tᵀ M_red T``), so a MAC computed on moved shapes is
+    the nodal MAC.
+
+    Per link, in the order of its columns (a root twist reads upstream columns only):
+    ``u_l = φ_l + G_l (E_l(q_s) φ − E_l(q_t) u)``, with ``E_l`` the root twist (6, nx) and
+    ``G_l = C_l⁻¹ R_l`` the constant map of a root twist to the link's own coordinates.
+
+    Args:
+        model: A :class:`~pinflex.erls.FlexibleModel` the conditioned solve covers.
+        terms: Its pose terms (``model.pose_terms``) of the samples.
+        ns: Number of samples.
+    """
+
+    def __init__(self, model, terms, ns: int):
+        from pinflex.erls import solve
+
+        plan = solve.solve_plan(model)
+        twist = solve.root_twists(model, plan, terms, ns)
+        self.links = [(c.start, c.stop, twist[link], g) for link, c, g in _link_maps(model)
+                      if twist.get(link) is not None]
+
+    def move(self, phi: np.ndarray, src, dst) -> np.ndarray:
+        """Shapes ``phi`` (b, nx, k) of samples ``src`` in the coordinates of samples ``dst``.
+
+        ``src`` and ``dst`` are sample indices (b,) or one index each.
+        """
+        out = np.array(phi, dtype=float)
+        for a, z, E, G in self.links:
+            d = E[src][..., :a] @ phi[..., :a, :] - E[dst][..., :a] @ out[..., :a, :]
+            out[..., a:z, :] += G @ d
+        return out
+
+
+def _link_maps(model) -> list:
+    """Per flexible link ``(name, core, G = C_x⁻¹ R_x)`` in column order (cached per model)."""
+    cached = model.__dict__.get("_tracking_link_maps")
+    if cached is not None:
+        return cached
+    from pinflex.erls import solve
+
+    plan = solve.solve_plan(model)
+    out = []
+    for link, c in sorted(plan.cores.items(), key=lambda kv: kv[1].start):
+        G = np.linalg.solve(c.C[c.x_rows], c.R[c.x_rows])
+        G.setflags(write=False)
+        out.append((link, c, G))
+    model.__dict__["_tracking_link_maps"] = out
+    return out
+
+
+def solver_eigenpairs(model, Q, y, *, n_modes: int, one_pose: bool = False):
+    """The lowest ``n_modes`` non-rigid eigenpairs at many poses in solver coordinates.
+
+    Same eigenproblem as :func:`eigenpairs` (and as
+    :meth:`~pinflex.erls.FlexibleModel.frequencies`), solved as the conditioned solve does:
+    the condensed solver-coordinate mass ``B`` (stiffness ``I``), ``λ = 1/μ`` for its largest
+    eigenvalues ``μ``.
+
+    Args:
+        model: A :class:`~pinflex.erls.FlexibleModel`.
+        Q: Checked joint samples (ns, nv).
+        y: Checked design values (ny,) or (ns, ny).
+        n_modes: Number of lowest modes.
+        one_pose: Every sample has the pose ``Q[0]`` (only the design changes): the mass
+            is assembled once, linear in the design, and the shapes of all samples are in
+            one set of coordinates.
+
+    Returns:
+        ``(eigvals, shapes, mass, pose_map)``: λ (ns, k) ascending [rad²/s²]; shapes
+        (ns, nx, k) mass-normalised with ``B``; ``B`` (ns, nx, nx); a :class:`PoseMap` of
+        the samples (None with ``one_pose``). None when the conditioned solve does not
+        cover the model or does not resolve one of the modes (then use :func:`eigenpairs`).
+    """
+    from pinflex.erls import solve
+
+    if not solve.supported(model):
+        return None
+    ns = Q.shape[0]
+    k = min(int(n_modes), model.nx)
+    if one_pose:
+        terms = model.pose_terms(Q[:1])
+        M0, Md = solve.mass(model, terms, y, 1, split=True)
+        Y = np.broadcast_to(y, (ns, model.ny))
+        M = M0 + np.tensordot(Y, Md[:, 0], axes=1)  # point masses: linear in the design
+    else:
+        terms = model.pose_terms(Q)
+        M = solve.mass(model, terms, y, ns)
+    B, _, _ = solve.condense(model, M)
+    mu, V = np.linalg.eigh(B)
+    if not np.all(np.isfinite(mu)):
+        raise EigenSolverError("a non-finite eigenvalue appeared along the samples: the mass "
+                               "of the model is not finite")
+    top = mu[:, ::-1][:, :k]
+    if np.any(top <= solve.noise_level(mu)[:, None]):
+        return None  # a requested mode below the inverse form's rounding level
+    V = V[:, :, ::-1][:, :, :k]
+    pose_map = None if one_pose else PoseMap(model, terms, ns)
+    return 1.0 / top, V / np.sqrt(top)[:, None, :], B, pose_map
+
+
 def track(
     eigvals: np.ndarray,
     shapes: np.ndarray,
@@ -232,6 +356,7 @@ def track(
     mac_min: float = 0.5,
     veer_rtol: float = 0.05,
     veer_mac: float = 0.5,
+    pose_map: PoseMap | None = None,
 ) -> ModeTracking:
     """Follow modes by shape through sampled eigenpairs.
 
@@ -248,6 +373,11 @@ def track(
         mac_min: A match below this MAC is reported as ``"ambiguous"``.
         veer_rtol: Relative gap under which neighbouring modes count as approaching.
         veer_mac: Shape-rotation threshold of a veering (MAC before vs after).
+        pose_map: When the shapes of each sample are in coordinates of their own (solver
+            coordinates, see :class:`PoseMap`), the map that expresses a shape of one sample
+            in the coordinates of another; every MAC then compares the shapes in the
+            coordinates of the sample whose mass weights it. ``start_shapes`` must be in the
+            coordinates of sample ``start``.
 
     Returns:
         A :class:`ModeTracking`.
@@ -275,6 +405,9 @@ def track(
     def weight(s):
         return None if mass is None else mass[s]
 
+    def moved(x, src, dst):  # shapes of samples src in the coordinates of samples dst
+        return x if pose_map is None else pose_map.move(x, src, dst)
+
     perm = np.full((ns, n), -1, dtype=int)  # slot r (reference sorted index) -> sorted index
     mac_step = np.ones((ns, n))
     ambiguous: list[tuple[int, int, float]] = []
@@ -288,18 +421,31 @@ def track(
     ref_shapes = phi[start][:, perm[start]]  # reference shape of each slot, at `start`
     # MAC of sorted modes between consecutive samples, all steps at once: C[s] pairs the
     # sorted modes of sample s (rows) with those of s + 1 (columns), weighted with M[s + 1].
-    C = _step_macs(phi, mass)
+    C = _step_macs(phi, mass, None if pose_map is None else
+                   moved(phi[:-1], np.arange(ns - 1), np.arange(1, ns)))
     fwd, bwd = _step_maps(C)  # sorted index at s -> at s + 1, and back
-    for s in range(start, ns - 1):
-        perm[s + 1] = fwd[s][perm[s]]
-        mac_step[s + 1] = C[s][perm[s], perm[s + 1]]
-    for s in range(start - 1, -1, -1):
-        perm[s] = bwd[s][perm[s + 1]]
-        mac_step[s] = C[s][perm[s], perm[s + 1]]
+    ident = np.all(fwd == np.arange(n), axis=1)  # steps that keep every sorted index
+    perm[start:] = perm[start]
+    for s in np.flatnonzero(~ident[start:]) + start:  # forward: s -> s + 1
+        perm[s + 1:] = fwd[s][perm[s]]
+    perm[:start] = perm[start]
+    for s in np.flatnonzero(~ident[:start])[::-1]:  # backward: s + 1 -> s
+        perm[: s + 1] = bwd[s][perm[s + 1]]
+    if ns > 1:
+        steps = np.arange(ns - 1)[:, None]
+        macs = C[steps, perm[:-1], perm[1:]]  # step s -> s + 1, (ns - 1, n)
+        mac_step[start + 1:] = macs[start:]
+        mac_step[:start] = macs[:start]
     for r in range(n):
         bad = np.flatnonzero(mac_step[:, r] < mac_min)
         ambiguous.extend((int(s), r, float(mac_step[s, r])) for s in bad)
-    if mass is None:
+    if pose_map is not None:
+        ref_at = moved(np.broadcast_to(ref_shapes, (ns,) + ref_shapes.shape), start,
+                       np.arange(ns))  # (ns, ndof, n)
+        Mref = ref_at if mass is None else mass @ ref_at
+        cross = np.swapaxes(Mref, 1, 2) @ phi
+        nref = np.sum(Mref * ref_at, axis=1)
+    elif mass is None:
         cross = np.einsum("ir,sik->srk", ref_shapes, phi)
         nref = np.einsum("ir,ir->r", ref_shapes, ref_shapes)[None, :]
         nref = np.broadcast_to(nref, (ns, n))
@@ -307,12 +453,12 @@ def track(
         Mref = mass @ ref_shapes  # (ns, ndof, n)
         cross = np.einsum("sir,sik->srk", Mref, phi)
         nref = np.einsum("sir,ir->sr", Mref, ref_shapes)
-    nphi = np.einsum("sik,sik->sk", phi, phi if mass is None else mass @ phi)
+    nphi = np.sum(phi * (phi if mass is None else mass @ phi), axis=1)
     idx = np.arange(ns)[:, None], np.arange(n)[None, :], perm
     mac_ref = cross[idx] ** 2 / (nref * np.take_along_axis(nphi, perm, axis=1))
     tracked = np.take_along_axis(lam, perm, axis=1)  # (ns, n) by slot
     events = _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac,
-                     mac_step)
+                     mac_step, moved)
     cols = [m - 1 for m in modes]
     return ModeTracking(
         modes=modes,
@@ -327,14 +473,20 @@ def track(
     )
 
 
-def _step_macs(phi: np.ndarray, mass: np.ndarray | None) -> np.ndarray:
-    """MAC matrices (ns − 1, n, n) between the sorted shapes of samples s and s + 1."""
-    a, b = phi[:-1], phi[1:]
+def _step_macs(phi: np.ndarray, mass: np.ndarray | None, a: np.ndarray | None = None
+               ) -> np.ndarray:
+    """MAC matrices (ns − 1, n, n) between the sorted shapes of samples s and s + 1.
+
+    ``a``: the shapes of samples 0..ns−2 in the coordinates of samples 1..ns−1 (default: the
+    shapes themselves, one set of coordinates for all samples).
+    """
+    a = phi[:-1] if a is None else a
+    b = phi[1:]
     mb = b if mass is None else mass[1:] @ b
     ma = a if mass is None else mass[1:] @ a
-    cross = np.einsum("sik,sil->skl", a, mb)
-    na = np.einsum("sik,sik->sk", a, ma)
-    nb = np.einsum("sik,sik->sk", b, mb)
+    cross = np.swapaxes(a, 1, 2) @ mb
+    na = np.sum(a * ma, axis=1)
+    nb = np.sum(b * mb, axis=1)
     return cross**2 / (na[:, :, None] * nb[:, None, :])
 
 
@@ -355,7 +507,8 @@ def _step_maps(C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return fwd, bwd
 
 
-def _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac, mac_step):
+def _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac, mac_step,
+            moved):
     ns, n = lam.shape
     events: list[ModeEvent] = []
     f = np.sqrt(np.maximum(tracked, 0.0)) / (2.0 * np.pi)
@@ -391,8 +544,8 @@ def _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_m
                       != np.sign(perm[s, a] - perm[s, b])):
                 continue  # the pair swaps here: a crossing, reported above
             # the mode's own shape before and after the approach
-            C = mac_matrix(phi[left][:, [perm[left, a]]], phi[right][:, [perm[right, a]]],
-                           weight(right))
+            C = mac_matrix(moved(phi[left][:, [perm[left, a]]], left, right),
+                           phi[right][:, [perm[right, a]]], weight(right))
             mac = float(C[0, 0])
             if mac < veer_mac:
                 events.append(ModeEvent(
@@ -414,6 +567,7 @@ def track_modes(
     veer_rtol: float = 0.05,
     veer_mac: float = 0.5,
     check_bounds: bool = True,
+    coordinates: str = "auto",
 ) -> ModeTracking:
     """Track modes of a FlexibleModel by shape along joint samples.
 
@@ -433,6 +587,11 @@ def track_modes(
         veer_rtol: See :func:`track`.
         veer_mac: See :func:`track`.
         check_bounds: Refuse design values outside their bounds.
+        coordinates: ``"solver"``: eigenpairs of the conditioned solve (the one
+            :meth:`~pinflex.erls.FlexibleModel.frequencies` uses), shapes compared through
+            :class:`PoseMap` (the same MACs as in nodal coordinates); ``"nodal"``: eigenpairs
+            of the nodal-coordinate pencil (:func:`eigenpairs`); ``"auto"`` (default): solver
+            where the conditioned solve covers the model and resolves the modes, else nodal.
 
     Returns:
         A :class:`ModeTracking`; ``sorted_eigvals`` holds the lowest ``max(modes) + extra``
@@ -448,7 +607,20 @@ def track_modes(
     if not modes or min(modes) < 1 or max(modes) > model.n_elastic:
         raise ConfigurationError(f"modes {modes} must lie in 1..{model.n_elastic}")
     n = min(model.n_elastic, max(modes) + max(int(extra), 0))
-    lam, phi, mass = eigenpairs(model, Q, Yb, n_modes=n, check_bounds=check_bounds)
+    if coordinates not in ("auto", "solver", "nodal"):
+        raise ConfigurationError(f"coordinates = {coordinates!r}: use 'auto', 'solver' or "
+                                 "'nodal'")
+    solver = coordinates != "nodal"
+    pairs = _pairs(model, Q, Y if Y.ndim == 1 else Yb, n, check_bounds, solver)
+    if pairs is None:
+        if coordinates == "solver":
+            raise ConfigurationError("the conditioned solve does not cover this model or "
+                                     "does not resolve the tracked modes: use "
+                                     "coordinates='nodal' or 'auto'")
+        solver = False
+        pairs = _pairs(model, Q, Yb, n, check_bounds, False)
+    assert pairs is not None
+    lam, phi, mass, pose_map = pairs
     start, start_shapes = 0, None
     if reference is not None and not isinstance(reference, tuple) and np.ndim(reference) == 0:
         start = int(reference)
@@ -459,13 +631,32 @@ def track_modes(
         q0 = model.check_q(q0)
         start = int(np.argmin(np.linalg.norm(Q - q0, axis=1)))
         y0 = Yb[start] if y0 is None else model.check_y(y0, bounds=check_bounds)
-        start_shapes = _lead_in(model, Q, Yb, start, q0, y0, n, mac_min, check_bounds)
+        start_shapes = _lead_in(model, Q, Yb, start, q0, y0, n, mac_min, check_bounds, solver)
+        if start_shapes is None:  # the lead-in left the conditioned solve: all nodal
+            if coordinates == "solver":
+                raise ConfigurationError("the conditioned solve does not resolve the tracked "
+                                         "modes on the way from the reference point: use "
+                                         "coordinates='nodal' or 'auto'")
+            return track_modes(model, Q, y, modes=modes, reference=reference, extra=extra,
+                               mac_min=mac_min, veer_rtol=veer_rtol, veer_mac=veer_mac,
+                               check_bounds=check_bounds, coordinates="nodal")
     return track(lam, phi, mass, modes=modes, start=start, start_shapes=start_shapes,
-                 mac_min=mac_min, veer_rtol=veer_rtol, veer_mac=veer_mac)
+                 mac_min=mac_min, veer_rtol=veer_rtol, veer_mac=veer_mac, pose_map=pose_map)
 
 
-def _lead_in(model, Q, Y, start, q0, y0, n, mac_min, check_bounds):
-    """Shapes at ``Q[start]`` numbered as at the point (q0, y0), walked in small steps."""
+def _pairs(model, Q, Y, n, check_bounds, solver, one_pose=False):
+    """``(eigvals, shapes, mass, pose_map)`` of the samples; None if solver coordinates fail."""
+    if solver:
+        return solver_eigenpairs(model, Q, Y, n_modes=n, one_pose=one_pose)
+    return (*eigenpairs(model, Q, Y, n_modes=n, check_bounds=check_bounds), None)
+
+
+def _lead_in(model, Q, Y, start, q0, y0, n, mac_min, check_bounds, solver):
+    """Shapes at ``Q[start]`` numbered as at the point (q0, y0), walked in small steps.
+
+    In solver coordinates (``solver``) the last walk point is the pose of ``Q[start]``, so its
+    shapes are in that sample's coordinates; None when the walk leaves the conditioned solve.
+    """
     qs, ys = Q[start], Y[start]
     if Q.shape[0] > 1:
         step = float(np.median(np.linalg.norm(np.diff(Q, axis=0), axis=1)))
@@ -480,7 +671,17 @@ def _lead_in(model, Q, Y, start, q0, y0, n, mac_min, check_bounds):
     t = np.linspace(0.0, 1.0, nsteps + 1)[:, None]
     Qp = q0 + t * (qs - q0)
     Yp = y0 + t * (ys - y0)
-    lam, phi, mass = eigenpairs(model, Qp, Yp, n_modes=n, check_bounds=check_bounds)
-    walk = track(lam, phi, mass, modes=tuple(range(1, n + 1)), start=0, mac_min=mac_min)
+    Qp[-1] = qs  # the sample's own pose (its solver coordinates)
+    one_pose = dq <= 1e-12 * (1.0 + float(np.linalg.norm(qs)))  # a walk in the design only
+    if one_pose:
+        Qp[:] = qs
+    if solver:
+        Yp = model.check_y(Yp, bounds=check_bounds)
+    pairs = _pairs(model, Qp, Yp, n, check_bounds, solver, one_pose)
+    if pairs is None:
+        return None
+    lam, phi, mass, pose_map = pairs
+    walk = track(lam, phi, mass, modes=tuple(range(1, n + 1)), start=0, mac_min=mac_min,
+                 pose_map=pose_map)
     # shapes of the last lead-in point, ordered by the reference's numbering
     return phi[-1][:, walk.permutation[-1]]

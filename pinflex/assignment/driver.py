@@ -90,7 +90,9 @@ class AssignmentResult:
         solution: Its ProxQP answer.
         taylor: The Taylor model the last QP was built from.
         refinements: Re-expansions accepted by the sequential refinement.
-        timings_s: Compute time of each stage [s].
+        timings_s: Compute time of each stage [s] (wall clock).
+        cpu_timings_s: The same stages in CPU time of the calling thread [s] (with
+            single-thread BLAS all of the work; a loaded machine does not inflate it).
         settings: The constraints the problem was built with: ``mass_budget_kg``,
             ``floors`` ``[(mode, f_min_hz)]``, ``bands`` ``[(mode, a_hz, b_hz)]``,
             ``quantity`` (see :mod:`pinflex.assignment.report`).
@@ -135,6 +137,7 @@ class AssignmentResult:
     floors_model: str = ""
     floor_margin_hz: float | None = None
     joints: dict[str, str] = field(default_factory=dict)
+    cpu_timings_s: dict[str, float] = field(default_factory=dict)
 
 
 def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
@@ -394,8 +397,16 @@ def assign_frequencies(
         from pinflex.batch.runner import ProgressBar
     bar = ProgressBar(4 + (max_refinements if refine else 0), "assignment stages",
                       bool(progress))
-    t_start = time.perf_counter()
+    t_start, c_start = time.perf_counter(), time.thread_time()
     timings: dict[str, float] = {}
+    cpu: dict[str, float] = {}
+
+    def stage(key: str, since: tuple[float, float]) -> None:  # add a stage's wall and CPU
+        timings[key] = timings.get(key, 0.0) + time.perf_counter() - since[0]
+        cpu[key] = cpu.get(key, 0.0) + time.thread_time() - since[1]
+
+    def now() -> tuple[float, float]:
+        return time.perf_counter(), time.thread_time()
     Q = model.check_q(trajectory.q)
     check_trajectory_limits(model, trajectory)
     if y_before is None:
@@ -414,22 +425,22 @@ def assign_frequencies(
                 f"freq_before_hz has shape {f_before.shape}; expected {(Q.shape[0], len(modes))}"
             )
 
-    t0 = time.perf_counter()
+    t0 = now()
     problem, taylor = build_assignment(model, trajectory, targets, **build_kwargs)
-    timings["expansion_and_build"] = time.perf_counter() - t0
+    stage("expansion_and_build", t0)
     bar.update()
     reference = (taylor.q0, taylor.y0)
-    t0 = time.perf_counter()
+    t0 = now()
     if freq_before_hz is None:
         before = verify_tracked(model, Q, y_before, tgt, tmodes, modes, reference)
     else:  # given by the caller (a sweep shares them): taken as the tracked frequencies
         cols = [modes.index(m) for m in tmodes]
         err = float(np.abs(f_before[:, cols].T / tgt - 1.0).max())
         before = Verification(None, f_before, f_before, err, err)
-    timings["exact_before"] = time.perf_counter() - t0
+    stage("exact_before", t0)
     bar.update()
     floors = list(build_kwargs.get("floors", ()))
-    t0 = time.perf_counter()
+    t0 = now()
     floors_model = "taylor" if floors else ""
     try:
         solution = solve_assignment_qp(problem)
@@ -439,18 +450,18 @@ def assign_frequencies(
         problem, taylor, solution = _floors_on_exact(
             model, trajectory, targets, build_kwargs, problem, taylor, y_before, exc)
         floors_model = "taylor+exact"
-    timings["qp"] = time.perf_counter() - t0
+    stage("qp", t0)
     bar.update()
     y = _design_from(model, taylor, solution.dy)
-    t0 = time.perf_counter()
+    t0 = now()
     after = verify_tracked(model, Q, y, tgt, tmodes, modes, reference)
-    timings["exact_verification"] = time.perf_counter() - t0
+    stage("exact_verification", t0)
     bar.update()
     predicted = _predicted_error(problem, taylor, trajectory, targets, solution, build_kwargs)
     refinements = 0
     while refine and refinements < max_refinements:
         kwargs = dict(build_kwargs, y0=y, q0=taylor.q0, taylor=None)
-        t0 = time.perf_counter()
+        t0 = now()
         p2, tm2 = build_assignment(model, trajectory, targets, **kwargs)
         try:
             s2 = solve_assignment_qp(p2)
@@ -458,7 +469,7 @@ def assign_frequencies(
             break
         y2 = _design_from(model, tm2, s2.dy)
         v2 = verify_tracked(model, Q, y2, tgt, tmodes, modes, reference)
-        timings["refinement"] = timings.get("refinement", 0.0) + time.perf_counter() - t0
+        stage("refinement", t0)
         bar.update()
         if v2.max_error >= after.max_error * (1 - 1e-9):
             break
@@ -475,6 +486,7 @@ def assign_frequencies(
     bar.total = bar.done
     bar.close()
     timings["total"] = time.perf_counter() - t_start
+    cpu["total"] = time.thread_time() - c_start
     err_before, err_after = before.max_error, after.max_error
     events = _target_events(before, after, tmodes)
     _warn_outcome(model, y, before, after, events, tmodes, predicted, margin)
@@ -495,6 +507,7 @@ def assign_frequencies(
         taylor=taylor,
         refinements=refinements,
         timings_s=timings,
+        cpu_timings_s=cpu,
         settings={
             "mass_budget_kg": build_kwargs.get("mass_budget_kg"),
             "floors": [(int(m), float(f) if np.ndim(f) == 0 else
