@@ -6,7 +6,9 @@ blocks: the only pose-dependent factors are the links' root twists (6 × nx) and
 Jacobians (6 × nv). Their jets are small, so the truncated products of the assembly cost a
 small fraction of those of the nodal-coordinate assembly (:func:`matrix_jets`), whose factors
 are the full nodal motion matrices of every link. Eigenvalues are invariant under the change
-of coordinates, so their Taylor coefficients are the same.
+of coordinates, so their Taylor coefficients are the same. Section, material and joint-spring
+terms (:mod:`pinflex.parametric.solver_design`) make ``K`` a jet too: in the design variables
+only for sections and materials, through the attachment twists for springs.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import scipy.sparse as sp
 from pinflex.erls import FlexibleModel, solve
 from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
+from pinflex.parametric import solver_design
 from pinflex.parametric.matrices import expansion_variables, pose_jets
 
 
@@ -124,10 +127,15 @@ def static_joints(model: FlexibleModel) -> frozenset[int]:
     return frozenset(out)
 
 
-def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int):
-    """Mass jet over ``joint_idx`` + ``design_idx`` (and the space), in solver coordinates."""
+def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int,
+               pose: list | None = None):
+    """Mass jet over ``joint_idx`` + ``design_idx`` (and the space), in solver coordinates.
+
+    ``pose``, when given a list, receives the pose terms and their algebra (None for one pose).
+    """
     space = JetSpace(len(joint_idx) + len(design_idx), int(order))
     nj, nd = len(joint_idx), len(design_idx)
+    alg = None
     if nj:
         qspace = JetSpace(nj, int(order))
         alg = SparseJetAlgebra(qspace)
@@ -135,8 +143,11 @@ def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int):
         Mq, Mdq = solve.mass(model, terms, y0, 1, alg=alg, split=True)
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:
-        Mq, Mdq = solve.mass(model, model.pose_terms(q0[None]), y0, 1, split=True)
+        terms = model.pose_terms(q0[None])
+        Mq, Mdq = solve.mass(model, terms, y0, 1, split=True)
         alphas = [()]
+    if pose is not None:
+        pose += [terms, alg]
     zeros = (0,) * nd
     emb = np.array([space.index[a + zeros] for a in alphas])
     M = np.zeros((space.ncoef,) + Mq.shape[1:])
@@ -161,16 +172,21 @@ def solver_matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     coordinates of the matrices differ (their eigenvalues are the same).
     """
     q0, y0, joint_idx, design_idx, order = expansion_variables(model, q0, y0, order, joints, design)
-    space, M = _mass_jets(model, q0, y0, joint_idx, design_idx, order)
-    K = np.zeros_like(M)
-    K[0, : model.nx, : model.nx] = np.eye(model.nx)
+    pose: list = []
+    space, M = _mass_jets(model, q0, y0, joint_idx, design_idx, order, pose)
+    K0 = np.zeros(M.shape[1:])
+    K0[: model.nx, : model.nx] = np.eye(model.nx)
+    M, K = solver_design.add_terms(model, space, pose[0], pose[1], len(joint_idx), design_idx,
+                                   y0, M, K0)
+    if K.ndim == 2:
+        K = np.concatenate([K[None], np.zeros((space.ncoef - 1,) + K.shape)])
     return space, M, K, joint_idx, design_idx
 
 
 def reduced_solver_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
                         joints: Sequence[str] | None = None,
                         design: Sequence[str] | None = None):
-    """The mass jet over the variables that can change it, and the constant stiffness.
+    """The mass and stiffness jets over the variables that can change them.
 
     Like :func:`solver_matrix_jets`, but the expanded joints that cannot enter the pencil
     (:func:`static_joints`) are left out of the jet space: every coefficient that involves
@@ -180,7 +196,9 @@ def reduced_solver_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     Returns:
         ``(full_space, space, keep, M, K0, joint_idx, design_idx)``: the space of all
         expanded variables, the reduced space, the full-space variable of each reduced one,
-        the mass jet (space.ncoef, nd, nd), the stiffness (nd, nd), and the expanded indices.
+        the mass jet (space.ncoef, nd, nd), the stiffness: one matrix (nd, nd) when it is the
+        constant ``blockdiag(I, 0)``, else its jet (sections, materials, joint springs:
+        :func:`pinflex.parametric.solver_design.add_terms`), and the expanded indices.
     """
     q0, y0, joint_idx, design_idx, order = expansion_variables(model, q0, y0, order, joints, design)
     nj = len(joint_idx)
@@ -190,10 +208,13 @@ def reduced_solver_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     if not live and not design_idx:  # nothing moves the spectrum: keep one variable
         live = [0]
     keep = live + list(range(nj, nj + len(design_idx)))
-    space, M = _mass_jets(model, q0, y0, [joint_idx[k] for k in live], design_idx, order)
+    pose: list = []
+    space, M = _mass_jets(model, q0, y0, [joint_idx[k] for k in live], design_idx, order, pose)
     K0 = np.zeros(M.shape[1:])
     K0[: model.nx, : model.nx] = np.eye(model.nx)
-    return full_space, space, keep, M, K0, joint_idx, design_idx
+    M, K = solver_design.add_terms(model, space, pose[0], pose[1], len(live), design_idx, y0,
+                                   M, K0)
+    return full_space, space, keep, M, K, joint_idx, design_idx
 
 
 def embed(full_space: JetSpace, space: JetSpace, keep: Sequence[int], jet: np.ndarray):

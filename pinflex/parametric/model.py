@@ -12,7 +12,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from pinflex import jets
-from pinflex.erls import FlexibleModel, solve
+from pinflex.erls import FlexibleModel
 from pinflex.exceptions import (
     ConfigurationError,
     EigenSolverError,
@@ -22,6 +22,7 @@ from pinflex.exceptions import (
 from pinflex.jets import JetSpace
 from pinflex.jets.evaluation import monomial_rows
 from pinflex.linalg import readonly as _readonly
+from pinflex.parametric import solver_design
 from pinflex.parametric.conditioned import embed, expansion_eigenpairs, reduced_solver_jets
 from pinflex.parametric.eigen import eigen_jets, radius_estimate, spectrum_slopes
 from pinflex.parametric.matrices import matrix_jets
@@ -592,8 +593,8 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
     check_taylor((model.nv if joints is None else len(joints)) + n_design, order, model.ndof,
                  n_design)
     idx = [model.n_rigid + m - 1 for m in modes]
-    solver = solve.supported(model)
-    if solver:  # solver coordinates: constant stiffness, only the joints that change M
+    solver = solver_design.covered(model)
+    if solver:  # solver coordinates: only the joints that change the pencil, design terms
         space, rspace, keep, M, K, jidx, didx = reduced_solver_jets(
             model, q0, y0, order=order, joints=joints, design=design)
     else:
@@ -601,8 +602,10 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
                                               design=design)
         rspace, keep = space, list(range(space.nvars))
     try:
-        if solver:
+        if solver and K.ndim == 2:
             w, V = expansion_eigenpairs(model, M[0])
+        elif solver:  # design-dependent stiffness or springs: K(x0) is not blockdiag(I, 0)
+            w, V = solver_design.expansion_eigenpairs(model, K[0], M[0])
         else:
             w, V = sla.eigh(K[0], M[0], check_finite=False)
     except np.linalg.LinAlgError as exc:

@@ -1,0 +1,315 @@
+"""Section, material and joint-spring design terms in the solver coordinates.
+
+The solver coordinates of :mod:`pinflex.erls.solve` scale every element of a flexible link by
+the Cholesky factor ``Dt`` of its clamped-tip stiffness at the nominal design: ``w = Dt z``.
+``Dt`` stays frozen at the nominal design, so a design that changes the section or the
+material changes only constant per-link blocks:
+
+* **Stiffness.** The tip block is linear in the rigidities, ``k_tip(y) = Σ_c f_c(y) k_c``
+  (``c = EA, GJ, EIy, EIz``), so in ``w`` the stiffness of a link is ``I_N ⊗ K̂(y)`` with
+  ``K̂(y) = I + Σ_c (f_c(y) − f_c(nom)) Dt⁻ᵀ k_c Dt⁻¹``: still block diagonal, and it does
+  not depend on the pose. Its jet has coefficients only on the pure-design multi-indices.
+* **Mass.** The beam mass is linear in ``ρA`` and ``ρI_p``; the constant blocks ``H`` of
+  :class:`pinflex.erls.solve._LinkCore` are then ``Σ_c f_c H_c`` with ``H_c = Aᵀ M_c A``
+  (``A`` the link's constant kinematic map), and the link's part of the mass assembly is
+  linear in them: ``M(q, y) = M(q, nom) + Σ_c (f_c(y) − f_c(nom)) M̂_c(q)`` where ``M̂_c``
+  is the link's part assembled with ``H_c``.
+* **Joint springs.** ``K += k gᵀ g`` with ``g = [−aᵀθ_parent(w), C_j]`` the physical relative
+  motion (:mod:`pinflex.erls.joints`), ``θ_parent`` the elastic rotation at the joint's
+  attachment in solver coordinates; a stiffness that is a design parameter is one more
+  channel with the unit matrix ``gᵀ g``.
+
+Degrees in the design variables (exact jets whatever the degree: the channel functions run in
+jet arithmetic, :mod:`pinflex.parametric.design`): point masses 1 (``M``); joint stiffness 1
+(``K``); ``E`` 1 in ``EA, EI``; ``G`` 1 in ``GJ``; density 1 in ``ρA, ρI_p``; linear density 1
+in ``ρA``; explicit ``A, I, J`` 1; circle diameters: ``A, ρA`` degree 2, ``I, J, ρI_p`` degree 4
+(hollow circle: jointly in outer diameter and wall); rectangle ``A`` 2 (bilinear), ``I`` 4;
+products of a material and a section variable add their degrees (``E·I``: 5). Not polynomial:
+the rectangle's torsion constant (a rational function of the side ratio) and, with a linear
+density, ``ρI_p = μ (I_y + I_z) / A``. The pose enters only the mass terms, so the stiffness jet
+is zero on every coefficient that involves a joint.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pinflex import beam
+from pinflex.erls import design as erls_design
+from pinflex.erls import solve
+from pinflex.jets import JetSpace
+from pinflex.jets.scalar import Scalar, coefficients
+from pinflex.parametric.design import _separable_pairs
+
+_K_NAMES = ("EA", "GJ", "EIy", "EIz")
+
+
+def covered(model) -> bool:
+    """Whether the solver-coordinate route takes this model's expansion.
+
+    Every design variable (point masses, sections, materials, joint stiffness) and free or
+    spring joints are covered; locked joints are not (they go through the nodal pencil).
+    """
+    return model.nx > 0 and not model._locked_joints
+
+
+def _unit_tip(spec, name: str, nd: np.ndarray) -> np.ndarray:
+    """Clamped-tip block of the element stiffness per unit of rigidity ``name``."""
+    le = spec.length_m / spec.elements
+    args = [0.0, 0.0, 0.0, 0.0]
+    args[_K_NAMES.index(name)] = 1.0
+    return beam.element_stiffness(le, *args)[6:, 6:][np.ix_(nd, nd)]
+
+
+def link_blocks(model) -> dict:
+    """Per design channel of a beam, its constant solver-coordinate block (cached).
+
+    Returns ``{channel index: block}``: for a stiffness channel the per-element ``K̂_c``
+    (r × r), for a mass channel the six blocks ``(H_oo, H_oe, H_ov, H_ee, H_ev, H_vv)``.
+    """
+    cached = model.__dict__.get("_solver_design_blocks")
+    if cached is not None:
+        return cached
+    plan = solve.solve_plan(model)
+    out: dict = {}
+    for n, ch in enumerate(model.design_channels):
+        if ch.name == "stiffness":
+            continue
+        core = plan.cores[ch.owner]
+        bp = model.plan.beams[ch.owner]
+        spec = bp.spec
+        rows = np.asarray(bp.rows)
+        N = spec.elements
+        r = rows.size // (N + 1)
+        nd = rows[:r]
+        if ch.kind == "K":
+            le = spec.length_m / N
+            sec = spec.section
+            ke = beam.element_stiffness(le, spec.E * sec.A, spec.G * sec.J, spec.E * sec.Iy,
+                                        spec.E * sec.Iz)
+            Dt = np.linalg.cholesky(ke[6:, 6:][np.ix_(nd, nd)]).T  # as solve_plan
+            zinv = np.linalg.inv(Dt)
+            blk = zinv.T @ _unit_tip(spec, ch.name, nd) @ zinv
+            out[n] = 0.5 * (blk + blk.T)
+            continue
+        A = np.concatenate([core.C, core.R, bp.jac], axis=1)[rows]
+        H = A.T @ (ch.unit @ A)
+        H = 0.5 * (H + H.T)
+        o = core.stop - core.start
+        out[n] = (H[:o, :o], H[:o, o : o + 6], H[:o, o + 6 :], H[o : o + 6, o : o + 6],
+                  H[o : o + 6, o + 6 :], H[o + 6 :, o + 6 :])
+    model.__dict__["_solver_design_blocks"] = out
+    return out
+
+
+def _link_mass(core, H, J, ep, alg, nx: int, nv: int, nd: int) -> np.ndarray:
+    """One link's part of the solver-coordinate mass with blocks ``H`` (as :func:`solve.mass`)."""
+    H_oo, H_oe, H_ov, H_ee, H_ev, H_vv = H
+    mm, c0 = alg.mm, alg.const_at
+    out = np.zeros((alg.size, nd, nd))
+    a, z = core.start, core.stop
+    out[c0, a:z, a:z] += H_oo
+    if nv:
+        X = H_ov @ J
+        out[:, a:z, nx:] += X
+        out[:, nx:, a:z] += np.swapaxes(X, -1, -2)
+        out[:, nx:, nx:] += mm(np.swapaxes(J, -1, -2), H_vv @ J)
+    if ep is not None:
+        w = ep.shape[-1]
+        X = H_oe @ ep
+        out[:, a:z, :w] += X
+        out[:, :w, a:z] += np.swapaxes(X, -1, -2)
+        epT = np.swapaxes(ep, -1, -2)
+        out[:, :w, :w] += mm(epT, H_ee @ ep)
+        if nv:
+            X = mm(epT, H_ev @ J)
+            out[:, :w, nx:] += X
+            out[:, nx:, :w] += np.swapaxes(X, -1, -2)
+    return out
+
+
+def spring_rows(model, terms, alg, twists, sources, joint) -> np.ndarray:
+    """``g`` (lead, 1, nd): the joint's physical relative motion over ``[w; q]``."""
+    plan = solve.solve_plan(model)
+    nx, nd = plan.nx, plan.nx + plan.nv
+    k = next(i for i, j in enumerate(model.plan.joints) if j is joint)
+    tw = twists[joint.parent]
+    e_full = None
+    if tw is not None:
+        e = solve.explicit_twist(tw, sources, alg)
+        e_full = np.zeros((alg.size, 6, nx))
+        e_full[:, :, : e.shape[-1]] = e
+    tau = solve._twist_at(plan.joint_attach[k], e_full, alg, nx)
+    g = np.zeros((alg.size, 1, nd))
+    if tau is not None:
+        a = joint.R_o @ joint.axis  # the joint axis in parent link axes
+        part = tau[:, 3:] if joint.kind == "revolute" else tau[:, :3]
+        g[:, 0, :nx] = -np.einsum("i,lix->lx", a, part)
+    g[alg.const_at, 0, nx:] += model.coord_map[joint.user_col]
+    return g
+
+
+def _spring_unit(model, terms, alg, twists, sources, joint) -> np.ndarray:
+    g = spring_rows(model, terms, alg, twists, sources, joint)
+    return alg.mm(np.swapaxes(g, -1, -2), g)
+
+
+def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np.ndarray,
+              K0: np.ndarray):
+    """Add the section, material and spring terms to the solver-coordinate jets.
+
+    Args:
+        model: The flexible model.
+        space: The (reduced) jet space: ``nj`` expanded joints, then the design variables.
+        terms: Pose terms in the joints' jet space (or at ``q0`` when ``nj`` is 0).
+        alg: Their algebra (a sparse jet algebra, or None for one pose).
+        nj: Number of expanded joints in ``space``.
+        design_idx: Expanded design variables (indices into ``model.design``).
+        y0: Expansion design (ny,).
+        M: Mass jet (space.ncoef, nd, nd) without these terms (modified in place).
+        K0: The plain stiffness ``blockdiag(I, 0)`` (nd, nd).
+
+    Returns:
+        ``(M, K)``: ``K`` is ``K0`` itself when nothing adds stiffness, else its jet.
+    """
+    plan = solve.solve_plan(model)
+    nx, nv = plan.nx, plan.nv
+    nd = nx + nv
+    channels = model.design_channels
+    if not channels and not model._spring_joints:
+        return M, K0
+    salg = solve._algebra(alg, 1)
+    twists, sources = solve.factored_twists(model, plan, terms, salg)
+    nq = salg.size  # coefficients of the joints' space (1 without joints)
+    nd_vars = len(design_idx)
+    if nj:
+        qspace = JetSpace(nj, space.order)
+        alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
+    else:
+        alphas = [()]
+    zeros = (0,) * nd_vars
+    emb = np.array([space.index[a + zeros] for a in alphas])
+    K = np.zeros((space.ncoef, nd, nd))
+    K[0] = K0
+    stiff = bool(model._spring_joints)  # whether K differs from K0
+    # springs at their nominal stiffness: K += k gᵀ g (pose jets at zero design degree); a
+    # design stiffness adds (k(y) − k(nom)) gᵀ g below, as a channel
+    units = {j.name: _spring_unit(model, terms, salg, twists, sources, j)
+             for j, _ in model._spring_joints}
+    for j, k in model._spring_joints:
+        K[emb] += k * units[j.name]
+    if channels:
+        names = [d.name for d in model.design]
+        y0 = np.asarray(y0, dtype=float)
+        nominal = model.y0
+        f0 = erls_design.channel_values(model, lambda n: nominal[names.index(n)])
+        erls_design.check_sections(model, lambda n: y0[names.index(n)])
+        if nd_vars:
+            dspace = JetSpace(nd_vars, space.order)
+            var_of = {names[j]: k for k, j in enumerate(design_idx)}
+
+            def get(name):
+                j = names.index(name)
+                if name in var_of:
+                    return Scalar.variable(dspace, var_of[name], y0[j])
+                return float(y0[j])
+
+            f = [coefficients(dspace, v).copy() for v in erls_design.channel_values(model, get)]
+            ia, ib, tg = _separable_pairs(space.order, nj, nd_vars)
+        else:
+            f = [np.array([float(v)]) for v in
+                 erls_design.channel_values(model, lambda n: float(y0[names.index(n)]))]
+            ia, ib, tg = np.arange(nq), np.zeros(nq, dtype=int), emb
+        # the constant coefficient from the float formulas: exactly zero at the nominal design
+        # (the jet arithmetic may round the same value differently)
+        at_y0 = erls_design.channel_values(model, lambda n: float(y0[names.index(n)]))
+        for fc, v, v0 in zip(f, at_y0, f0):
+            fc[0] = float(v) - float(v0)
+        blocks = link_blocks(model)
+        ep_cache: dict = {}
+        for n, (ch, fc) in enumerate(zip(channels, f)):
+            nz = fc[ib] != 0.0  # a channel depends on few design variables: few pairs
+            if not np.any(nz):
+                continue
+            pa, pb, pt = ia[nz], ib[nz], tg[nz]
+            if ch.name == "stiffness":
+                K[pt] += units[ch.owner][pa] * fc[pb][:, None, None]
+                stiff = True
+                continue
+            core = plan.cores[ch.owner]
+            if ch.kind == "K":
+                n_el = (core.stop - core.start) // blocks[n].shape[0]
+                blk = np.kron(np.eye(n_el), blocks[n])
+                pure = pa == 0  # the stiffness does not depend on the pose
+                sl = slice(core.start, core.stop)
+                K[pt[pure], sl, sl] += fc[pb[pure]][:, None, None] * blk
+                stiff = True
+                continue
+            if ch.owner not in ep_cache:
+                tw = twists[ch.owner]
+                ep_cache[ch.owner] = (None if tw is None else
+                                      solve.explicit_twist(tw, sources, salg, core.start))
+            unit = _link_mass(core, blocks[n], terms.jac[ch.owner], ep_cache[ch.owner], salg,
+                              nx, nv, nd)
+            M[pt] += unit[pa] * fc[pb][:, None, None]
+    return M, (K if stiff else K0)
+
+
+def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
+    """All eigenpairs of the solver-coordinate pencil ``(K0, M0)`` at the expansion point.
+
+    ``K0`` is positive definite on the elastic coordinates (``w`` and the spring joints' ``q``)
+    and zero on the free joints. A Cholesky factor of the mass would lose the low modes' digits
+    (in ``w`` the mass spans the whole spectrum), so the pencil is solved in the inverse form of
+    :func:`pinflex.parametric.conditioned.expansion_eigenpairs`: with ``K_ee = L Lᵀ`` the
+    elastic coordinates ``u = Lᵀ [w; q_s]`` make the stiffness the identity, the free joints are
+    condensed out of the mass, and the symmetric ``B = M_uu − M_uf M_ff⁻¹ M_fu`` gives
+    ``μ = 1/λ``. A constant change of coordinates of one pencil: eigenvalues unchanged.
+
+    Returns:
+        ``(w, V)``: eigenvalues ascending (free joints' zeros first) and mass-normalised
+        shapes over ``[w; q]`` (columns in the order of ``w``).
+    """
+    from pinflex.exceptions import ConfigurationError
+
+    nd = K0.shape[0]
+    nx = nd - model.nv
+    Z = None
+    C = model.coord_map
+    if not np.array_equal(C, np.eye(model.nv)):
+        # absolute user angles: split free and sprung joints in relative values r = C q,
+        # where a free joint carries no stiffness (q = C⁻¹ r)
+        Z = np.eye(nd)
+        Z[nx:, nx:] = np.linalg.inv(C)
+        K0, M0 = Z.T @ K0 @ Z, Z.T @ M0 @ Z
+    e = np.asarray(model._elastic_cols, dtype=int)
+    fr = np.asarray(model._rigid_cols, dtype=int)
+    L = np.linalg.cholesky(K0[np.ix_(e, e)])
+    Linv = np.linalg.inv(L)  # u = Lᵀ z: z = L⁻ᵀ u
+    Mue = Linv @ M0[np.ix_(e, e)] @ Linv.T
+    Muf = Linv @ M0[np.ix_(e, fr)]
+    Mff = M0[np.ix_(fr, fr)]
+    if fr.size:
+        Lf = np.linalg.cholesky(Mff)
+        Y = np.linalg.solve(Lf, Muf.T)
+        B = Mue - Y.T @ Y
+    else:
+        B = Mue
+    mu, U = np.linalg.eigh(0.5 * (B + B.T))
+    mu, U = mu[::-1], U[:, ::-1]
+    bad = ~(mu > solve.noise_level(mu))
+    if np.any(bad):
+        raise ConfigurationError(
+            f"the highest {int(bad.sum())} modes at the expansion point are not resolved in "
+            "solver coordinates; use fewer elements"
+        )
+    phi_u = U / np.sqrt(mu)
+    V = np.zeros((nd, nd))
+    nf = fr.size
+    V[e, nf:] = Linv.T @ phi_u
+    if nf:
+        V[fr, nf:] = -np.linalg.solve(Mff, Muf.T @ phi_u)
+        V[fr, :nf] = np.linalg.inv(Lf.T)
+    if Z is not None:
+        V = Z @ V
+    return np.concatenate([np.zeros(nf), 1.0 / mu]), V
