@@ -30,6 +30,8 @@ from pinflex.linalg import readonly as _readonly
 from ..exceptions import InvalidBeam
 
 _GAUSS3_X, _GAUSS3_W = np.polynomial.legendre.leggauss(3)
+_GAUSS3_UNIT = 0.5 * (_GAUSS3_X + 1.0)      # nodes on [0, 1]
+_GAUSS3_HALF_W = 0.5 * _GAUSS3_W            # weights on [0, 1]
 
 
 @dataclass(frozen=True)
@@ -130,6 +132,14 @@ class Planform:
             np.diff(self.x_m) * _log_mean_inverse(moments[:-1], moments[1:]),
         ])
         table = np.vstack([np.zeros((1, 5)), np.cumsum(pieces, axis=0)])
+        table.setflags(write=False)
+        return table
+
+    @cached_property
+    def _pieces(self) -> np.ndarray:
+        """Per planform piece: left abscissa, full width there and width slope, (p + 1, 3)."""
+        x, w = self.x_m, 2.0 * self.half_width_m
+        table = np.column_stack([x[:-1], w[:-1], (w[1:] - w[:-1]) / (x[1:] - x[:-1])])
         table.setflags(write=False)
         return table
 
@@ -319,6 +329,8 @@ def _log_mean_inverse(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Mean of 1/v over a segment where v varies linearly from a to b."""
     ratio = b / a
     close = np.abs(ratio - 1.0) < 1e-6
+    if not close.any():
+        return np.log(ratio) / (b - a)
     safe = np.where(close, 2.0, ratio)
     exact = np.log(safe) / np.where(close, 1.0, b - a)
     u = ratio - 1.0
@@ -333,43 +345,47 @@ def _partial_integrals(planform: Planform, s_m: np.ndarray) -> np.ndarray:
     exactly (3-point Gauss for the polynomials, the logarithmic mean for 1/I). The width is
     linear on the piece, so it is evaluated from the piece's end values directly.
     """
+    return _partial_integrals_and_widths(planform, s_m)[0]
+
+
+def _partial_integrals_and_widths(planform: Planform,
+                                  s_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_partial_integrals` and the full widths w(s) [m] found on the way."""
     x = planform.x_m
-    piece = np.clip(np.searchsorted(x, s_m, side="right") - 1, 0, x.size - 2)
+    # s = L belongs to the last piece.
+    piece = np.minimum(np.maximum(x.searchsorted(s_m, "right") - 1, 0), x.size - 2)
     table = planform._cumulative_integrals
-    left = x[piece]
+    left, w_left, slope = planform._pieces[piece].T
     span = s_m - left
-    w_left = 2.0 * planform.half_width_m[piece]
-    slope = (2.0 * planform.half_width_m[piece + 1] - w_left) / (x[piece + 1] - left)
-    offset = 0.5 * span[:, None] * (_GAUSS3_X + 1.0)
+    offset = span[:, None] * _GAUSS3_UNIT
     q = left[:, None] + offset
     w = w_left[:, None] + slope[:, None] * offset
-    gw = 0.5 * span[:, None] * _GAUSS3_W
-    gww = gw * w
+    gww = (span[:, None] * _GAUSS3_HALF_W) * w
     cubed = planform.thickness_m**3 / 12.0
+    w_end = w_left + slope * span
     if planform.thickness_profile_m is None:
-        i_left, i_right = w_left * cubed, (w_left + slope * span) * cubed
+        i_left, i_right = w_left * cubed, w_end * cubed
     else:
         i_left, i_right = planform.area_moment_m4(left), planform.area_moment_m4(s_m)
     out = np.empty((s_m.size, 5))
+    gwq = gww * q
     out[:, 0] = gww.sum(1)
-    out[:, 1] = (gww * q).sum(1)
-    out[:, 2] = (gww * q * q).sum(1)
+    out[:, 1] = gwq.sum(1)
+    out[:, 2] = (gwq * q).sum(1)
     out[:, 3] = (gww * w * w).sum(1)
     out[:, 4] = span * _log_mean_inverse(i_left, i_right)
-    return table[piece] + out
+    return table[piece] + out, w_end
 
 
 def compliance_between(planform: Planform, bounds_m: np.ndarray) -> np.ndarray:
     """Bending compliances int dx / EI of consecutive segments of trusted bounds [1/(N m)]."""
     x = planform.x_m
     s_m = np.asarray(bounds_m, dtype=float)
-    piece = np.clip(np.searchsorted(x, s_m, side="right") - 1, 0, x.size - 2)
-    left = x[piece]
+    piece = np.minimum(np.maximum(x.searchsorted(s_m, "right") - 1, 0), x.size - 2)
+    left, w_left, slope = planform._pieces[piece].T
     span = s_m - left
     if planform.thickness_profile_m is None:
         cubed = planform.thickness_m**3 / 12.0
-        w_left = 2.0 * planform.half_width_m[piece]
-        slope = (2.0 * planform.half_width_m[piece + 1] - w_left) / (x[piece + 1] - left)
         i_left, i_right = w_left * cubed, (w_left + slope * span) * cubed
     else:
         i_left, i_right = planform.area_moment_m4(left), planform.area_moment_m4(s_m)

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .beams import Planform, _partial_integrals, compliance_between, segment_arrays
+from .beams import Planform, _partial_integrals_and_widths, compliance_between, segment_arrays
 from .chain import PrbdmChain
 from .problem import FAILED_LOAD_ERROR, Evaluation, MappingProblem
 
@@ -154,12 +154,15 @@ class ChainWorkspace:
         return np.triu(m) + np.triu(m, 1).T
 
 
-def link_moments(planform: Planform, s: np.ndarray, links: tuple):
+def link_moments(planform: Planform, s: np.ndarray, links: tuple,
+                 end_widths: np.ndarray | None = None):
     r"""Inertia integrals of links 1..n about their joints and their joint-position derivatives.
 
     For link j on :math:`[s_j, s_{j+1}]` (:math:`s_{n+1} = L`):
     :math:`\mu_0 = \int\rho A`, :math:`\mu_1 = \int (x - s_j)\rho A`,
     :math:`\mu_2 = \int ((x - s_j)^2 + t^2/12)\rho A`.
+
+    ``end_widths``: the widths at s_1..s_n, L when already known (uniform thickness only).
 
     Returns:
         (mu, dmu) with mu shape (3, n) and dmu shape (3, n, n) = d mu_k[j] / d s_i.
@@ -170,9 +173,13 @@ def link_moments(planform: Planform, s: np.ndarray, links: tuple):
     mass, com, _, iyy = links[:4]
     arm = com - s
     mu = np.array([mass, mass * arm, iyy + mass * arm**2])
-    ends = np.concatenate([s, [length]])
-    rho_a = rho * planform.area_m2(ends)
-    t2 = _thickness(planform, ends) ** 2 / 12.0
+    if end_widths is None:
+        ends = np.concatenate([s, [length]])
+        rho_a = rho * planform.area_m2(ends)
+        t2 = _thickness(planform, ends) ** 2 / 12.0
+    else:
+        rho_a = (rho * planform.thickness_m) * end_widths
+        t2 = np.full(n + 1, planform.thickness_m**2 / 12.0)
     dmu = np.zeros((3, n, n))
     idx = np.arange(n)
     # Start of link j moves: the integrand leaves, and the reference point moves.
@@ -180,7 +187,7 @@ def link_moments(planform: Planform, s: np.ndarray, links: tuple):
     dmu[1, idx, idx] = -mu[0]
     dmu[2, idx, idx] = -rho_a[:n] * t2[:n] - 2.0 * mu[1]
     # End of link j (the start of link j + 1) moves: the integrand joins at arm b - a.
-    arm_end = (ends[1:] - ends[:-1])[: n - 1]
+    arm_end = s[1:] - s[:-1]
     rho_end = rho_a[1:n]
     dmu[0, idx[:-1], idx[1:]] = rho_end
     dmu[1, idx[:-1], idx[1:]] = rho_end * arm_end
@@ -197,22 +204,20 @@ def mass_structure(lengths: np.ndarray, mu: np.ndarray, dmu: np.ndarray):
         dmu: Their derivatives (3, n, n).
     """
     n = lengths.size
+    ix = _indices(n)
     m0, m1, m2 = mu
-    outboard = np.concatenate([np.cumsum(m0[::-1])[::-1][1:], [0.0]])  # T_b = sum_{j>b} m_j
+    outboard = np.zeros(n)
+    outboard[:-1] = np.cumsum(m0[:0:-1])[::-1]          # T_b = sum_{j>b} m_j
     h = lengths * outboard + m1
-    idx = np.arange(n)
-    lower = np.minimum.outer(idx, idx)
-    upper = np.maximum.outer(idx, idx)
-    g = lengths[lower] * h[upper]
+    idx, lower, upper = ix.idx, ix.lower, ix.upper
+    lengths_low = lengths[lower]
+    g = lengths_low * h[upper]
     g[idx, idx] = lengths**2 * outboard + m2
     # d l_a / d s_i: l_a = s_{a+1} - s_a (s_{n+1} = L).
-    dl = np.zeros((n, n))
-    dl[idx, idx] = -1.0
-    dl[idx[:-1], idx[1:]] = 1.0
-    later = (idx[None, :] > idx[:, None]).astype(float)  # later[b, c] = c > b
-    d_out = later @ dmu[0]                                # (b, i)
+    dl = ix.dl
+    d_out = ix.later @ dmu[0]                          # (b, i)
     dh = dl * outboard[:, None] + lengths[:, None] * d_out + dmu[1]
-    dg = dl[lower] * h[upper][:, :, None] + lengths[lower][:, :, None] * dh[upper]
+    dg = dl[lower] * h[upper][:, :, None] + lengths_low[:, :, None] * dh[upper]
     dg[idx, idx] = (2.0 * lengths * outboard)[:, None] * dl + (lengths**2)[:, None] * d_out \
         + dmu[2]
     return g, dg
@@ -224,7 +229,8 @@ def _design_geometry(problem: MappingProblem, gamma: np.ndarray):
     The same numbers as :meth:`ChainWorkspace.update` (``pinocchio=False``) followed by
     :func:`reference_stiffness_and_derivative` without the derivative: the beam's cumulative
     integrals are evaluated once at the link ends and at the segment-law bounds together.
-    The link tuple holds (mass, com, None, iyy, None, mean area moment, None).
+    The link tuple holds (mass, com, None, iyy, None, mean area moment, None); the widths
+    are those at s_1..s_n, L and, for the segment law, at the midpoints between joints.
     """
     planform = problem.planform
     length = planform.length_m
@@ -238,7 +244,7 @@ def _design_geometry(problem: MappingProblem, gamma: np.ndarray):
         points = np.concatenate([ends, 0.5 * (ends[:n - 1] + ends[1:n])])
     else:
         points = ends
-    cumulative = _partial_integrals(planform, points)
+    cumulative, widths = _partial_integrals_and_widths(planform, points)
     seg = cumulative[1:n + 1] - cumulative[:n]
     m0, m1, m2 = seg[:, 0], seg[:, 1], seg[:, 2]
     t = planform.thickness_m
@@ -255,7 +261,7 @@ def _design_geometry(problem: MappingProblem, gamma: np.ndarray):
         k_ref = e / (inv[1:] - inv[:-1])
     else:
         k_ref = np.sqrt(e * mean_i / mass)
-    return s, lengths, (mass, com, None, iyy, None, mean_i, None), k_ref
+    return s, lengths, (mass, com, None, iyy, None, mean_i, None), k_ref, widths
 
 
 def _mass_g(lengths: np.ndarray, links: tuple, s: np.ndarray) -> np.ndarray:
@@ -291,6 +297,7 @@ class _Indices:
         self.lower = np.minimum.outer(idx, idx)
         self.upper = np.maximum.outer(idx, idx)
         self.cum_gamma = np.tril(np.ones((n, n + 1)))       # s_j = L sum_{i<j} gamma_i
+        self.eye1 = np.eye(n + 1)
         dl = np.zeros((n, n))                               # d l_a / d s_i, l_a = s_{a+1} - s_a
         dl[idx, idx] = -1.0
         dl[idx[:-1], idx[1:]] = 1.0
@@ -314,33 +321,50 @@ def _indices(n: int) -> _Indices:
 
 def reference_stiffness_and_derivative(problem: MappingProblem, s: np.ndarray,
                                        lengths: np.ndarray, links: tuple,
-                                       derivative: bool = True):
+                                       derivative: bool = True,
+                                       known: tuple[np.ndarray, np.ndarray] | None = None):
     """Uncorrected stiffness (n,) and its derivative with respect to s, shape (n, n).
 
-    With ``derivative=False`` the derivative is None (not computed).
+    With ``derivative=False`` the derivative is None (not computed). ``known``: the stiffness
+    and the widths of :func:`_design_geometry` when already found (uniform thickness only).
     """
     planform = problem.planform
     n = s.size
     length = planform.length_m
     e = planform.material.youngs_modulus_pa
+    cubed = planform.thickness_m**3 / 12.0
     ends = np.concatenate([s, [length]])
     if problem.stiffness_law == "segment":
-        bounds = np.concatenate([[0.0], 0.5 * (ends[:-1] + ends[1:])[: n - 1], [length]])
-        k = 1.0 / compliance_between(planform, bounds)
+        if known is None:
+            bounds = np.concatenate([[0.0], 0.5 * (ends[:-1] + ends[1:])[: n - 1], [length]])
+            k = 1.0 / compliance_between(planform, bounds)
+        else:
+            k, widths = known
         if not derivative:
             return k, None
-        inv_ei = 1.0 / (e * planform.area_moment_m4(bounds))
+        if known is None:
+            inv_ei = 1.0 / (e * planform.area_moment_m4(bounds))
+        else:
+            bound_w = np.empty(n + 1)
+            bound_w[0], bound_w[1:n], bound_w[n] = 2.0 * planform.half_width_m[0], \
+                widths[n + 1:], widths[n]
+            inv_ei = 1.0 / ((e * cubed) * bound_w)
         db = _indices(n).db
         # The root and the tip bounds are fixed.
         dcomp = inv_ei[1:, None] * db[1:] - inv_ei[:-1, None] * db[:-1]
         return k, -(k**2)[:, None] * dcomp
     ell = ends[1:] - ends[:-1]
     mass, mean_i = links[0], links[5]
-    k = np.sqrt(e * mean_i / mass)
+    k = np.sqrt(e * mean_i / mass) if known is None else known[0]
     if not derivative:
         return k, None
-    i_end = planform.area_moment_m4(ends)
-    rho_a = planform.material.density_kg_m3 * planform.area_m2(ends)
+    if known is None:
+        i_end = planform.area_moment_m4(ends)
+        rho_a = planform.material.density_kg_m3 * planform.area_m2(ends)
+    else:
+        end_w = known[1][: n + 1]
+        i_end = cubed * end_w
+        rho_a = (planform.material.density_kg_m3 * planform.thickness_m) * end_w
     # Link j spans ends[j] .. ends[j + 1] (ends[n] = L fixed); moving an end by +1 changes
     # the link's integral of I by -/+ I(end), its length by -/+ 1 and its mass by -/+ rho A.
     half = 0.5 * k
@@ -424,11 +448,12 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
     gamma = raw / total
     factors = np.exp(x[n1:])
     length = problem.planform.length_m
+    widths: np.ndarray | None = None
     if pinocchio:
         s, lengths, links = workspace.update(gamma, True)
         k_ref = reference_stiffness_and_derivative(problem, s, lengths, links, False)[0]
     else:
-        s, lengths, links, k_ref = _design_geometry(problem, gamma)
+        s, lengths, links, k_ref, widths = _design_geometry(problem, gamma)
     n_p = problem.n_params
     poses = problem.poses
     m_poses = poses.shape[0]
@@ -509,11 +534,13 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
 
     def jacobian() -> np.ndarray:
         # ds/dx: s_j = L sum_{i<j} gamma_i; gamma = raw / sum(raw).
-        dgamma = (np.eye(n1) - gamma[:, None]) / total
+        dgamma = (ix.eye1 - gamma[:, None]) / total
         ds_dx = length * (ix.cum_gamma @ dgamma)
         dfreq = np.zeros((m_poses, nm, n_p))
-        dk_ref = reference_stiffness_and_derivative(problem, s, lengths, links)[1]
-        mu, dmu = link_moments(problem.planform, s, links)
+        known = None if widths is None else (k_ref, widths)
+        dk_ref = reference_stiffness_and_derivative(problem, s, lengths, links, known=known)[1]
+        mu, dmu = link_moments(problem.planform, s, links,
+                               None if widths is None else widths[:n1])
         dg = mass_structure(lengths[1:], mu, dmu)[1]
         dg_dx = dg @ ds_dx                                  # (n, n, n + 1): fractions only
         psi = ix.tri @ phi                                  # (m, n, nm)
@@ -631,16 +658,25 @@ def _tip_derivative(k_static: np.ndarray, theta: np.ndarray, forces: np.ndarray,
     return dtip, dtheta
 
 
-_TOP_CACHE: dict[int, np.ndarray] = {}
+class _PlanarIndices:
+    """Index and summation matrices of the planar Newton for n joints (built once per n)."""
 
-
-def _top_index(n: int) -> np.ndarray:
-    """max(i, j) for an n x n grid (cached)."""
-    top = _TOP_CACHE.get(n)
-    if top is None:
+    def __init__(self, n: int):
         idx = np.arange(n)
-        top = _TOP_CACHE.setdefault(n, np.maximum.outer(idx, idx))
-    return top
+        self.top = np.maximum.outer(idx, idx)          # max(i, j)
+        self.prefix = np.triu(np.ones((n, n)))         # (x @ prefix)_j = sum_{a <= j} x_a
+        self.suffix = np.ascontiguousarray(self.prefix.T)  # (x @ suffix)_i = sum_{a >= i} x_a
+        self.eye = np.eye(n)
+
+
+_PLANAR: dict[int, _PlanarIndices] = {}
+
+
+def _planar_indices(n: int) -> _PlanarIndices:
+    found = _PLANAR.get(n)
+    if found is None:
+        found = _PLANAR.setdefault(n, _PlanarIndices(n))
+    return found
 
 
 def planar_tip(root_m: float, ell: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -672,11 +708,16 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
     """
     theta = np.array(theta0, dtype=float)
     n_l, n = theta.shape
-    top = _top_index(n)
+    ix = _planar_indices(n)
+    top, prefix, suffix_sum = ix.top, ix.prefix, ix.suffix
     ok = np.ones(n_l, dtype=bool)
-    diag = np.arange(n)
+    k_diag = ix.eye * k
     fx_all, fz_all = forces[:, :1], forces[:, 1:]
     tangent = np.empty((n_l, n, n))
+    # Rows: the residual K theta - tau, then its two terms K theta and tau (one reduction
+    # gives the three norms of the convergence test).
+    terms = np.empty((3, n_l, n))
+    residual, kt, tau = terms[0], terms[1], terms[2]
 
     steps = max(1, int(load_steps))
     for step in range(1, steps + 1):
@@ -684,21 +725,18 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
         fx, fz = fx_all * frac, fz_all * frac
         active = ok.copy()
         for iteration in range(max_iter + 1):
-            q = np.cumsum(theta, axis=1)
-            c, sn = np.cos(q), np.sin(q)
+            q = theta @ prefix
+            lc, ls = ell * np.cos(q), ell * np.sin(q)
             # tau_i = sum_{a >= i} l_a u'(q_a) . F; the tangent's (i, j) entry is the suffix
             # sum from max(i, j) of l_a u(q_a) . F, plus k on the diagonal.
-            tau = np.cumsum((ell * (-sn * fx - c * fz))[:, ::-1], axis=1)[:, ::-1]
-            suffix = np.cumsum((ell * (c * fx - sn * fz))[:, ::-1], axis=1)[:, ::-1]
-            tangent = suffix[:, top]
-            tangent[:, diag, diag] += k
-            kt = k * theta
-            residual = kt - tau
-            norm = np.sqrt((residual * residual).sum(1))
-            scale = np.sqrt((kt * kt).sum(1)) + np.sqrt((tau * tau).sum(1)) + 1e-300
-            finite = np.isfinite(norm)
+            np.matmul(-ls * fx - lc * fz, suffix_sum, out=tau)
+            tangent = ((lc * fx - ls * fz) @ suffix_sum)[:, top] + k_diag
+            np.multiply(k, theta, out=kt)
+            np.subtract(kt, tau, out=residual)
+            norms = np.sqrt((terms * terms).sum(2))
+            finite = np.isfinite(norms[0])
             ok &= finite
-            active &= (norm > tol * scale) & finite
+            active &= (norms[0] > tol * (norms[1] + norms[2] + 1e-300)) & finite
             if not active.any():
                 break
             if iteration == max_iter:
@@ -713,14 +751,16 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
             except np.linalg.LinAlgError:
                 ok &= ~active
                 break
-    # The last tangent was formed at the final angles and the full load (symmetric).
-    eig_min = np.linalg.eigvalsh(tangent)[:, 0]
-    ok &= eig_min > 0.0
+    # The last tangent was formed at the final angles and the full load (symmetric): it is
+    # positive definite exactly when its Cholesky factorisation exists (per load on failure).
+    try:
+        np.linalg.cholesky(tangent)
+    except np.linalg.LinAlgError:
+        ok &= np.linalg.eigvalsh(tangent)[:, 0] > 0.0
     angle = np.arctan2(-forces[:, 1], forces[:, 0])
-    absolute = np.cumsum(theta, axis=1)
+    absolute = theta @ prefix
     low, high = np.minimum(0.0, angle), np.maximum(0.0, angle)
     slack = 1e-9 + 1e-12 * np.abs(absolute).max(axis=1, initial=0.0)
-    ok &= np.all(absolute >= (low - slack)[:, None], axis=1)
-    ok &= np.all(absolute <= (high + slack)[:, None], axis=1)
-    ok &= np.all(np.isfinite(theta), axis=1)
+    inside = (absolute >= (low - slack)[:, None]) & (absolute <= (high + slack)[:, None])
+    ok &= inside.all(axis=1) & np.isfinite(theta).all(axis=1)
     return theta, ok
