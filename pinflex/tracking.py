@@ -444,7 +444,7 @@ def track(
                        np.arange(ns))  # (ns, ndof, n)
         Mref = ref_at if mass is None else mass @ ref_at
         cross = np.swapaxes(Mref, 1, 2) @ phi
-        nref = np.sum(Mref * ref_at, axis=1)
+        nref = np.einsum("sir,sir->sr", Mref, ref_at)
     elif mass is None:
         cross = np.einsum("ir,sik->srk", ref_shapes, phi)
         nref = np.einsum("ir,ir->r", ref_shapes, ref_shapes)[None, :]
@@ -453,7 +453,7 @@ def track(
         Mref = mass @ ref_shapes  # (ns, ndof, n)
         cross = np.einsum("sir,sik->srk", Mref, phi)
         nref = np.einsum("sir,ir->sr", Mref, ref_shapes)
-    nphi = np.sum(phi * (phi if mass is None else mass @ phi), axis=1)
+    nphi = np.einsum("sik,sik->sk", phi, phi if mass is None else mass @ phi)
     idx = np.arange(ns)[:, None], np.arange(n)[None, :], perm
     mac_ref = cross[idx] ** 2 / (nref * np.take_along_axis(nphi, perm, axis=1))
     tracked = np.take_along_axis(lam, perm, axis=1)  # (ns, n) by slot
@@ -485,8 +485,8 @@ def _step_macs(phi: np.ndarray, mass: np.ndarray | None, a: np.ndarray | None = 
     mb = b if mass is None else mass[1:] @ b
     ma = a if mass is None else mass[1:] @ a
     cross = np.swapaxes(a, 1, 2) @ mb
-    na = np.sum(a * ma, axis=1)
-    nb = np.sum(b * mb, axis=1)
+    na = np.einsum("sik,sik->sk", a, ma)
+    nb = np.einsum("sik,sik->sk", b, mb)
     return cross**2 / (na[:, :, None] * nb[:, None, :])
 
 

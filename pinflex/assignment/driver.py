@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pinflex.assignment.points import PiecewiseTaylor
 from pinflex.assignment.problem import AssignmentQP, QPSolution, build_assignment_qp
 from pinflex.assignment.solve import solve_assignment_qp
 from pinflex.assignment.verify import (
@@ -124,7 +125,7 @@ class AssignmentResult:
     predicted_max_error_after: float
     problem: AssignmentQP
     solution: QPSolution
-    taylor: TaylorModel
+    taylor: TaylorModel | PiecewiseTaylor
     refinements: int = 0
     timings_s: dict[str, float] = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
@@ -190,9 +191,10 @@ def build_assignment(
     b_ineq=None,
     floors: Sequence[tuple[int, float]] = (),
     bands: Sequence[tuple[int, float, float]] = (),
-    taylor: TaylorModel | None = None,
+    taylor: TaylorModel | PiecewiseTaylor | None = None,
     taylor_tol: float | None = None,
-) -> tuple[AssignmentQP, TaylorModel]:
+    points_tol: float | None = None,
+) -> tuple[AssignmentQP, TaylorModel | PiecewiseTaylor]:
     """Build the assignment QP of ``targets`` along ``trajectory`` (not solved).
 
     Args:
@@ -219,6 +221,11 @@ def build_assignment(
             trajectory at ``y0`` and at the corners of the design box
             (:func:`pinflex.parametric.fidelity.order_for_tolerance`); the model's
             ``order_choice`` reports it.
+        points_tol: Cover the trajectory with the fewest Taylor expansion points (then the
+            lowest order) whose next-order estimate meets it at every sample at ``y0``
+            (:func:`pinflex.assignment.points.points_for_tolerance`); each sample's QP rows
+            come from its segment's model, ``q0`` and ``order`` are then ignored and the
+            model's ``points_choice`` reports the choice.
 
     Returns:
         ``(problem, taylor_model)``; the QP's variables are ``δy = y − y0`` of ``design``.
@@ -238,7 +245,15 @@ def build_assignment(
     for m in [t.mode for t in targets] + [f[0] for f in floors] + [b[0] for b in bands]:
         if m not in modes:
             modes.append(int(m))
-    if taylor is None and taylor_tol is not None:
+    if taylor_tol is not None and points_tol is not None:
+        raise ConfigurationError("give taylor_tol (one point, order by tolerance) or "
+                                 "points_tol (expansion points by tolerance), not both")
+    if taylor is None and points_tol is not None:
+        from pinflex.assignment.points import points_for_tolerance
+
+        taylor = points_for_tolerance(model, Q, y0, tol=points_tol, modes=modes, design=design,
+                                      quantity=quantity)
+    elif taylor is None and taylor_tol is not None:
         over = design_region(model, Q, y0, design)
         taylor = expand(model, q0, y0, order=8, modes=modes, design=design, tol=taylor_tol,
                         over=over)
@@ -698,7 +713,8 @@ def _warn_outcome(model, y, before, after, events, target_modes, predicted, marg
         )
 
 
-def _design_from(model: FlexibleModel, taylor: TaylorModel, dy: np.ndarray) -> np.ndarray:
+def _design_from(model: FlexibleModel, taylor: TaylorModel | PiecewiseTaylor, dy: np.ndarray
+                 ) -> np.ndarray:
     y = taylor.y0.copy()
     y[list(taylor.design_idx)] += dy
     lo = np.array([d.lower for d in model.design])

@@ -103,6 +103,7 @@ class AssignmentConfig:
     joints: str = "free"
     values: dict | None = None
     taylor_tol: float | None = None
+    points_tol: float | None = None
 
     def build_model(self) -> FlexibleModel:
         """The flexible model of the study."""
@@ -249,5 +250,6 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
         q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
         order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,
         floors=cfg.floors, bands=cfg.bands, taylor_tol=cfg.taylor_tol,
+        points_tol=cfg.points_tol,
     )
     return model, traj, result

@@ -29,6 +29,12 @@ def add_parser(sub) -> None:
                    help="pick the Taylor order (1-8) instead of the study's: the lowest whose "
                    "next-order estimate of the relative frequency error along the trajectory "
                    "(at y0 and the design-box corners) meets TOL; reported with its estimate")
+    p.add_argument("--points-tol", type=float, default=None, metavar="TOL",
+                   help="expand at several points instead of the study's q0: the fewest "
+                   "expansion points along the trajectory (then the lowest order, 1-8) whose "
+                   "next-order estimate of the relative frequency error meets TOL at every "
+                   "sample at y0; each sample's QP rows come from its segment's model; reports "
+                   "the points, the order, the estimate and the exact error of the cover")
     add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_assign)
 
@@ -55,7 +61,20 @@ def summary(result, total_s: float) -> dict:
         "joints": dict(result.joints),
         "taylor_order": int(result.taylor.order),
         "taylor_order_choice": _order_choice(result.taylor),
+        "taylor_points_choice": _points_choice(result.taylor),
     }
+
+
+def _points_choice(tm) -> dict | None:
+    """The ``--points-tol`` choice as plain JSON (None with one expansion point)."""
+    c = getattr(tm, "points_choice", None)
+    if not c:
+        return None
+    return {"tol": c["tol"], "points": list(c["points"]), "order": c["order"],
+            "estimate": c["estimate"], "exact_error": c["exact_error"],
+            "segments": [list(s) for s in tm.segments],
+            "candidates": {str(k): v for k, v in c["candidates"].items()},
+            "method": c["method"]}
 
 
 def _order_choice(tm) -> dict | None:
@@ -101,6 +120,16 @@ def cmd_assign(args: argparse.Namespace) -> int:
 
             raise ConfigurationError(f"--tol {args.tol}: give a positive relative tolerance")
         cfg.taylor_tol = args.tol
+    if args.points_tol is not None:
+        from pinflex.exceptions import ConfigurationError
+
+        if not args.points_tol > 0:
+            raise ConfigurationError(f"--points-tol {args.points_tol}: give a positive "
+                                     "relative tolerance")
+        if args.tol is not None:
+            raise ConfigurationError("give --tol (one expansion point, order by tolerance) or "
+                                     "--points-tol (expansion points by tolerance), not both")
+        cfg.points_tol = args.points_tol
     import sys
 
     model, traj, result = run_config(cfg, progress=not args.no_progress and sys.stderr.isatty())
@@ -130,6 +159,12 @@ def cmd_assign(args: argparse.Namespace) -> int:
     if choice is not None:
         print(f"Taylor order {choice['order']} for --tol {choice['tol']:g} (next-order estimate "
               f"{choice['estimate']:.3g} along the trajectory and design-box corners)")
+    points = _points_choice(result.taylor)
+    if points is not None:
+        print(f"Taylor expansion points for --points-tol {points['tol']:g}: "
+              f"{len(points['points'])} at samples {points['points']}, order {points['order']} "
+              f"(largest next-order estimate {points['estimate']:.3g}; exact error of the "
+              f"cover {points['exact_error']:.3g} along the trajectory at y0)")
     print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
           f"{100 * result.max_error_after:.2f} % "
           f"(predicted {100 * result.predicted_max_error_after:.2f} %)"
