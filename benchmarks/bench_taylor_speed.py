@@ -14,7 +14,8 @@ single-thread BLAS unless you set a count; the machine may be loaded, so read th
      times the assignment reports, wall and thread CPU) [target <= 30 ms]; beside it the exact
      frequencies of the same 152 poses, the floor of any exact verification
 
-Run: ``python benchmarks/bench_taylor_speed.py [--quick] [--cpu] [--json FILE]``.
+Run: ``python benchmarks/bench_taylor_speed.py [--quick] [--cpu] [--sections 123]
+[--rounds N] [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -68,9 +69,11 @@ def main(argv=None):
                         "machine then inflates neither side by waiting; sections 1-2; "
                         "section 3 always prints both)")
     parser.add_argument("--sections", default="123", help="which sections to run (default 123)")
+    parser.add_argument("--rounds", type=int, default=None,
+                        help="interleaved rounds per ratio (default 7, --quick 5)")
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
-    rounds = 5 if args.quick else 7
+    rounds = args.rounds or (5 if args.quick else 7)
     clock = time.thread_time if args.cpu else time.perf_counter
     print(f"bench_taylor_speed: {blas_threads()}; {rounds} interleaved rounds per ratio; "
           f"{'thread CPU' if args.cpu else 'wall'} time")

@@ -127,3 +127,77 @@ def test_concurrent_evaluations_do_not_share_rows(arm):
     for got, ref in zip(results, expected):
         for g in got:
             np.testing.assert_allclose(g, ref, rtol=1e-13, atol=0)
+
+
+@pytest.mark.parametrize("order,modes", [(2, (1,)), (4, (1, 2, 3)), (7, (2,))])
+def test_two_joint_grid_values_equal_the_coefficient_sum(arm, order, modes):
+    """The factored two-joint path equals Σ_α c_α δx^α (C- and F-ordered samples)."""
+    tm = expand(arm, Q0, Y0, order=order, modes=modes, design=[])
+    assert tm.evaluation_plan.grid is not None
+    assert expand(arm, Q0, Y0, order=order, modes=modes).evaluation_plan.grid is None
+    rng = np.random.default_rng(order)
+    Q = Q0 + 0.4 * rng.uniform(-1, 1, size=(33, 2))
+    dx = tm.offsets(Q, warn=False)
+    for quantity in ("eigval", "freq_hz"):
+        ref = jets.evaluate(tm.space, tm.jet(quantity), dx)
+        for samples in (np.ascontiguousarray(Q), np.asfortranarray(Q), Q[::-1][::-1]):
+            for lin in (False, True):
+                got = tm.evaluate(samples, quantity=quantity, linear_in_design=lin, warn=False)
+                assert got.shape == (33, len(modes))
+                np.testing.assert_allclose(got, ref, rtol=1e-13, atol=0)
+                np.testing.assert_allclose(tm.evaluate(samples, quantity=quantity, tol=np.inf),
+                                           ref, rtol=1e-13, atol=0)
+    # one sample, and none
+    np.testing.assert_allclose(tm.evaluate(Q[:1], quantity="freq_hz", tol=np.inf), ref[:1],
+                               rtol=1e-13)
+    assert tm.evaluate(Q[:0], quantity="freq_hz").shape == (0, len(modes))
+    tmd = expand(arm, Q0, Y0, order=order, modes=modes)
+    assert tmd.evaluate(Q[:0], quantity="freq_hz").shape == (0, len(modes))
+
+
+def test_first_screen_bounds_every_check_row(arm):
+    """|row_r(dx)| ≤ K_r τ^{d_r} with τ² = dxᵀ A dx, for every check row, at any offset.
+
+    The check rows are evaluated from the coefficients at random offsets of all sizes and
+    directions, including the whole-arm rotation (the direction in which benchmark A's
+    eigenvalues do not change, where A is thin).
+    """
+    rng = np.random.default_rng(3)
+    for modes in ((1,), (1, 2, 3)):
+        tm = expand(arm, Q0, Y0, order=4, modes=modes, design=[])
+        grid, plan = tm.evaluation_plan.grid, tm.evaluation_plan
+        dirs = np.vstack([rng.normal(size=(4000, 2)), [[1.0, 1.0], [1.0, -1.0], [1.0, 0.0]]])
+        dx = dirs * rng.uniform(0.01, 3.0, size=(dirs.shape[0], 1))
+        mon = jets.monomials(tm.space, dx)
+        for key, rows in plan.checked.items():
+            vals = np.abs(mon @ rows[plan.k:].T)  # (n, ncheck)
+            a01, a00, a11 = grid.form[0] / 2, grid.form[1], grid.form[2]
+            tau = np.sqrt(a00 * dx[:, 0] ** 2 + 2 * a01 * dx[:, 0] * dx[:, 1] + a11 * dx[:, 1] ** 2)
+            K, deg = (np.array(v) for v in grid.bounds[key])
+            assert np.all(np.isfinite(K))
+            bound = K[None, :] * tau[:, None] ** deg[None, :]
+            assert np.all(vals <= bound * (1 + 1e-12) + 1e-300)
+            # and not loose by much where the rows are largest (K is a maximum, not a guess)
+            assert np.all(np.max(vals / np.maximum(bound, 1e-300), axis=0)[K > 0] > 0.95)
+
+
+def test_first_screen_never_passes_a_tolerance_some_sample_misses(arm):
+    """Screen 1 passes only when every sample's estimate meets tol, and passes near q0."""
+    tm = expand(arm, Q0, Y0, order=4, modes=(1, 2), design=[])
+    grid, plan = tm.evaluation_plan.grid, tm.evaluation_plan
+    rng = np.random.default_rng(5)
+    passed = 0
+    for scale in (0.01, 0.05, 0.2, 0.5, 1.0):
+        Q = Q0 + scale * rng.uniform(-1, 1, size=(80, 2))
+        dx = tm.offsets(Q, warn=False)
+        t2 = float(np.max(grid.form @ np.stack([dx[:, 0] * dx[:, 1], dx[:, 0] ** 2,
+                                                 dx[:, 1] ** 2])))
+        worst = float(np.max(tm.error_estimate(dx, quantity="freq_hz")[0]))
+        for tol in (1e-2, 1e-4):
+            limit = grid.limit(("freq_hz", False), tol, plan.screen_passes)
+            if t2 <= limit:
+                assert worst <= tol
+                passed += 1
+        if np.isfinite(worst) and worst > 0:
+            assert t2 > grid.limit(("freq_hz", False), 0.99 * worst, plan.screen_passes)
+    assert passed >= 3  # the cheap screen does decide the common case

@@ -31,6 +31,7 @@ RADIUS_TOL = 1e-2
 """Default warning level of the estimated relative truncation error (1 %)."""
 _TINY = np.finfo(float).tiny
 _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python-level wrapper per call
+_dot, _abs, _mul, _sub, _matmul = np.dot, np.abs, np.multiply, np.subtract, np.matmul
 
 
 @dataclass(frozen=True)
@@ -320,6 +321,32 @@ class TaylorModel:
             tol: Relative error level of the check.
         """
         plan = self.evaluation_plan
+        grid = plan.grid
+        if grid is not None and Y is None:
+            # one or two joints, all expanded, no design (see _PowerGrid)
+            coef = grid.values.get((quantity, linear_in_design))
+            Qa = np.asarray(Q, dtype=float)
+            if coef is not None and Qa.ndim == 2 and Qa.shape[1] == 2 and Qa.shape[0]:
+                n = Qa.shape[0]
+                checked = True if warn or strict else False
+                if plan.lock.acquire(False):  # this thread owns the kept arrays
+                    try:
+                        run, P = (grid.scratch[checked].get(n)
+                                  or grid.new_scratch(n, checked))
+                        if not checked:
+                            return run(Qa.T, coef)
+                        value, t2 = run(Qa.T, coef)
+                        return self._grid_checked(value, t2, P, Qa, quantity, linear_in_design,
+                                                  strict, tol)
+                    finally:
+                        plan.lock.release()
+                # another thread evaluates: arrays of its own
+                run, P = grid.new_scratch(n, checked, keep=False)
+                if not checked:
+                    return run(Qa.T, coef)
+                value, t2 = run(Qa.T, coef)
+                return self._grid_checked(value, t2, P, Qa, quantity, linear_in_design,
+                                          strict, tol)
         key = (quantity, bool(linear_in_design))
         if key not in plan.values:
             self.jet(quantity)  # names the bad quantity
@@ -348,10 +375,31 @@ class TaylorModel:
         dx = self.offsets(Qa, Y, warn=False)
         return self._finish(monomial_rows(self.space, dx.T), dx, Qa, Y, key, warn, strict, tol)
 
+    def _grid_checked(self, value, t2, P, Qa, quantity, linear, strict, tol):
+        """The radius check of a :class:`_PowerGrid` evaluation (``t2``: largest τ²)."""
+        plan = self.evaluation_plan
+        grid = plan.grid
+        key = (quantity, bool(linear))
+        # screen 1: the largest A-norm of the offsets against the norm at which the bound
+        # of the estimate reaches tol
+        limit = grid.limits.get((key, tol))
+        if limit is None:
+            limit = grid.limit(key, tol, plan.screen_passes)
+        if t2 <= limit:
+            return value
+        # screen 2: every check row at every sample, the column-maximum screen
+        rows = grid.checked.get(key)
+        if rows is not None:
+            S = _dot(rows, grid.products(P))
+            _abs(S, out=S)
+            if plan.screen_passes(_MAX(S, axis=1).tolist(), tol):
+                return value
+        return self._checked_slow(None, None, Qa, None, key, tol, strict)
+
     def _finish(self, rows, dx, Qa, Y, key, warn, strict, tol):
         """Values from the monomial rows (ncoef, n), with the radius check when asked."""
         plan = self.evaluation_plan
-        if not (warn or strict):
+        if not (warn or strict) or not rows.shape[1]:  # (no sample: nothing to judge)
             return (plan.values[key] @ rows).T
         checked = plan.checked.get(key)
         if checked is None:  # no screen for this model (order 0, a vanishing eigenvalue)
@@ -367,6 +415,8 @@ class TaylorModel:
         """The per-sample estimate and report (:meth:`error_estimate`) and the value."""
         if dx is None:
             dx = self.offsets(Q, Y, warn=False)
+        if mon is None:
+            mon = monomial_rows(self.space, dx.T).T
         quantity, linear = key
         est, ratio, value = self._estimate_from(dx, mon @ self.degree_blocks[quantity])
         self._report(est, ratio, tol, strict, stacklevel=5)
@@ -453,6 +503,7 @@ class _EvaluationPlan:
     last: int  # group of order p
     before_last: int  # group of order p - 1 (-1: the constant, ratio 1)
     ncheck: int
+    grid: _PowerGrid | None = None
     lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
     scratch: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -510,6 +561,8 @@ class _EvaluationPlan:
             root=root, spec=spec, last=orders.index(p) if p >= 1 else -1,
             before_last=orders.index(p - 1) if p - 1 in orders else -1,
             ncheck=groups * k,
+            grid=_PowerGrid.build(tm, values, checked) if direct and nq == 2 and p >= 2
+            else None,
         )
 
     def screen_passes(self, colmax: list[float], tol: float) -> bool:
@@ -539,6 +592,201 @@ class _EvaluationPlan:
             if not tail * rho / max(1.0 - rho, 1e-12) <= bound:
                 return False
         return True
+
+
+@dataclass(frozen=True)
+class _PowerGrid:
+    """The evaluation of two-joint models (both joints expanded, no design), ``p ≥ 2``.
+
+    Per call: the powers of the offsets ``(x, y)``, ``P[j] = P[⌊j/2⌋] · P[j − ⌊j/2⌋]``
+    (``p − 1`` products of contiguous blocks, both variables at once); the value factored
+    as ``Σ_a x^a (Σ_b C_ab y^b)``: one small GEMM of the coefficient grid ``C_ab`` (zero
+    where ``a + b > p``) with the y-powers, one elementwise product with the x-powers (laid
+    out so that both operands are contiguous: the product also runs over the y-rows,
+    against zeros) and one matrix-vector product summing over ``a``. Five NumPy calls and
+    one subtraction, against ``2 (p − 1)`` row-slice products and a GEMM of the general
+    monomial rows.
+
+    The radius check is screened in two steps before the per-sample estimate, each an
+    upper bound of every sample's estimate (so the decisions are those of the per-sample
+    estimate):
+
+    1. every check row ``r`` of :class:`_EvaluationPlan` is a homogeneous polynomial of
+       degree ``d_r`` (the order-``j`` parts and the linear spectral rates), so
+       ``|row_r(dx)| ≤ K_r τ^{d_r}`` with ``τ² = dxᵀ A dx`` for a fixed ``A ≻ 0`` and
+       ``K_r`` the largest ``|row_r|`` on the ellipse ``τ = 1``. The estimate's bound grows
+       with each row, so it is below ``tol`` for every sample when ``max τ² ≤ T(tol)²``,
+       ``T`` found once per tolerance by bisection. Per call: ``τ²`` of all samples (one
+       product of three rows ``xy, x², y²``, the first computed for the check) and its
+       maximum. ``A`` is built from the check rows' own linear and quadratic forms (so the
+       directions in which the model does not change do not count), plus ``10⁻⁴`` of the
+       identity; ``K_r`` comes from 2048 points on the ellipse, raised by Bernstein's
+       inequality for trigonometric polynomials (``|f'| ≤ d ‖f‖``) to a rigorous bound.
+    2. when 1 fails: every check row at every sample and the column-maximum screen of
+       :meth:`_EvaluationPlan.screen_passes`.
+    """
+
+    order: int
+    k: int
+    values: dict[tuple[str, bool], np.ndarray]
+    checked: dict[tuple[str, bool], np.ndarray]
+    bounds: dict[tuple[str, bool], tuple[tuple[float, ...], tuple[int, ...]]]
+    form: np.ndarray
+    q0: np.ndarray
+    limits: dict = field(default_factory=dict, repr=False, compare=False)
+    scratch: dict = field(default_factory=lambda: {False: {}, True: {}}, repr=False,
+                          compare=False)  # {checked: {n: arrays}}
+
+    @classmethod
+    def build(cls, tm: TaylorModel, values, checked) -> _PowerGrid:
+        p, k = tm.order, len(tm.modes)
+        mi = tm.space.multi_indices
+        degree = mi.sum(axis=1)
+        vals = {}
+        for key, v in values.items():  # v: (k, ncoef) -> rows (mode, a), columns b
+            g = np.zeros((k, p + 1, p + 1))
+            g[:, mi[:, 0], mi[:, 1]] = v
+            vals[key] = _readonly(g.reshape(k * (p + 1), p + 1))
+        chk, rows_of = {}, {}
+        for key, c in checked.items():
+            rows = c[k:]
+            g = np.zeros((rows.shape[0], (p + 1) ** 2))
+            g[:, mi[:, 0] * (p + 1) + mi[:, 1]] = rows
+            chk[key] = _readonly(g)
+            rows_of[key] = rows
+        # A from the check rows' linear forms w (w wᵀ / |w|²) and quadratic forms H (|H|/‖H‖)
+        A0 = np.zeros((2, 2))
+        for rows in rows_of.values():
+            for row in rows:
+                d = set(degree[row != 0].tolist())
+                if d == {1}:
+                    w = row[1:3]
+                    A0 += np.outer(w, w) / (w @ w)
+                elif d == {2}:
+                    lam, V = np.linalg.eigh(np.array([[row[3], row[4] / 2],
+                                                      [row[4] / 2, row[5]]]))
+                    A0 += (V * np.abs(lam)) @ V.T / np.max(np.abs(lam))
+        top = np.max(np.linalg.eigvalsh(A0)) if np.all(np.isfinite(A0)) else 0.0
+        A = (A0 / top if top > 0 else np.eye(2)) + 1e-4 * np.eye(2)
+        A = 0.5 * (A + A.T)
+        # points of the ellipse dxᵀ A dx = 1: dx = L⁻ᵀ (cos θ, sin θ), A = L Lᵀ
+        theta = np.linspace(0.0, 2.0 * np.pi, 2048, endpoint=False)
+        circle = np.stack([np.cos(theta), np.sin(theta)])
+        ellipse = sla.solve_triangular(np.linalg.cholesky(A), circle, lower=True, trans="T")
+        mon = jets.monomials(tm.space, ellipse.T)
+        bounds = {}
+        for key, rows in rows_of.items():
+            K, deg = [], []
+            for row in rows:
+                d = set(degree[row != 0].tolist()) or {1}  # (a zero row: K = 0)
+                if len(d) != 1 or not np.all(np.isfinite(row)):
+                    K, deg = [np.inf], [1]  # not homogeneous: screen 1 never passes
+                    break
+                dr = d.pop()
+                # the largest |row| on the grid raised by Bernstein's inequality, and round-off
+                kr = float(np.max(np.abs(mon @ row))) / (1.0 - dr * np.pi / 2048)
+                K.append(kr * (1.0 + 1e-10))
+                deg.append(int(dr))
+            bounds[key] = (tuple(K), tuple(deg))
+        form = _readonly(np.array([2.0 * A[0, 1], A[0, 0], A[1, 1]]))  # · (xy, x², y²)
+        return cls(order=p, k=k, values=vals, checked=chk, bounds=bounds, form=form,
+                   q0=tm.q0.copy())
+
+    def limit(self, key, tol: float, screen) -> float:
+        """Largest ``max τ²`` that passes screen 1 at ``tol`` (cached per tolerance)."""
+        found = self.limits.get((key, tol))
+        if found is not None:
+            return found
+        bound = self.bounds.get(key)
+        limit = -1.0
+        if bound is not None and all(np.isfinite(bound[0])):
+            K, deg = bound
+
+            def passes(T: float) -> bool:
+                return bool(screen([kr * T ** d for kr, d in zip(K, deg)], tol))
+
+            lo, hi = 0.0, 1.0
+            if passes(lo):
+                while passes(hi) and hi < 1e300:
+                    lo, hi = hi, 2.0 * hi
+                if hi >= 1e300:
+                    limit = np.inf
+                else:
+                    for _ in range(200):
+                        mid = 0.5 * (lo + hi)
+                        if mid in (lo, hi):
+                            break
+                        lo, hi = (mid, hi) if passes(mid) else (lo, mid)
+                    limit = lo * lo * (1.0 - 1e-9)
+        if len(self.limits) >= 32:
+            self.limits.clear()
+        self.limits[key, tol] = limit
+        return limit
+
+    def new_scratch(self, n: int, checked: bool, keep: bool = True):
+        """The evaluation of ``n`` samples on arrays of its own: ``(run, P)``.
+
+        ``run(Qa.T, coef)`` fills the powers ``P`` (p+1, rows, n) and returns the values
+        (n, k), and with ``checked`` also the largest ``τ²`` of the samples. Kept for the next
+        calls (a few sizes, bounded) when ``keep``; callers then hold the plan's lock.
+        """
+        p, k = self.order, self.k
+        W = 3 if checked else 2  # rows per power: x, y (and xy for the check)
+        P = np.zeros((p + 1, W, n))
+        P[0] = 1.0
+        q0 = np.repeat(self.q0[:, None], n, axis=1)
+        first, Y = P[1, :2], P[:, 1, :]
+        steps = tuple((P[j // 2], P[j - j // 2], P[j]) for j in range(2, p + 1))
+        G2 = np.zeros((k * (p + 1), W * n))  # G = C Y in the first n columns, zeros after
+        H2 = np.empty_like(G2)
+        G, P2 = G2[:, :n], P.reshape(p + 1, W * n)
+        Gm: np.ndarray
+        Hm: np.ndarray
+        S: np.ndarray
+        if k == 1:
+            Gm, Hm, S = G2, H2, np.ones(p + 1)
+        else:
+            Gm, Hm = G2.reshape(k, p + 1, W * n), H2.reshape(k, p + 1, W * n)
+            S = np.kron(np.eye(k), np.ones((1, p + 1)))  # Σ_a per mode
+        sub, mul, mm, dot, mx = _sub, _mul, _matmul, _dot, _MAX
+        if not checked:
+            def run(QT, coef):
+                sub(QT, q0, first)
+                for a, b, out in steps:
+                    mul(a, b, out)
+                mm(coef, Y, out=G)  # G = C Y
+                mul(Gm, P2, Hm)  # H = G ⊙ X (and zeros ⊙ Y)
+                if k == 1:
+                    return dot(S, H2)[:n, None]  # Σ_a H[a]
+                return dot(S, H2)[:, :n].T
+        else:
+            x, y, xy = P[1, 0], P[1, 1], P[1, 2]
+            form = self.form
+            block = P.reshape(-1)[5 * n : 8 * n].reshape(3, n)  # xy, x², y²
+
+            def run(QT, coef):
+                sub(QT, q0, first)
+                mul(x, y, xy)
+                for a, b, out in steps:
+                    mul(a, b, out)
+                mm(coef, Y, out=G)
+                mul(Gm, P2, Hm)
+                value = dot(S, H2)[:n, None] if k == 1 else dot(S, H2)[:, :n].T
+                return value, mx(dot(form, block))
+        entry = (run, P)
+        if keep:
+            kept = self.scratch[checked]
+            nbytes = (4 + 2 * k) * P.nbytes
+            if len(kept) >= 4 or nbytes > 8 << 20:
+                kept.clear()
+            if nbytes <= 8 << 20:
+                kept[n] = entry
+        return entry
+
+    def products(self, P: np.ndarray) -> np.ndarray:
+        """Every monomial ``x^a y^b`` (``a, b ≤ p``) of the samples whose powers are ``P``."""
+        n = P.shape[2]
+        return (P[:, 0, None, :] * P[None, :, 1, :]).reshape(-1, n)
 
 
 def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence[int] = (1,),
