@@ -152,6 +152,9 @@ def test_warm_start_prediction_is_second_order(beam_truth):
     for h in (1e-2, 5e-3):
         x_new = x + h * direction
         predicted = np.array([warm.start(k, x_new) for k in range(3)])
+        together, have = warm.starts(x_new, 3, 3)        # the fits' form: all loads at once
+        assert have.all()
+        np.testing.assert_allclose(together, predicted, rtol=0, atol=1e-14)
         cold = WarmStarts()
         residuals_and_jacobian(problem, x_new, ChainWorkspace(beam, 3), cold)
         exact = np.array([cold.angles[k] for k in range(3)])

@@ -216,11 +216,15 @@ class Objective:
 
     def _weighted(self, res: np.ndarray, x: np.ndarray) -> np.ndarray:
         n1 = self.problem.n_joints + 1
-        parts = [np.sqrt(self.w_eig) * res[: self.n_eig]]
+        n_eig = self.n_eig
+        rows = res.size if self.w_defl > 0.0 else n_eig
+        out = np.empty(rows + 1)
+        out[:n_eig] = res[:n_eig] if self.w_eig == 1.0 else np.sqrt(self.w_eig) * res[:n_eig]
         if self.w_defl > 0.0:
-            parts.append(np.sqrt(self.w_defl) * res[self.n_eig:])
-        parts.append(np.array([np.sum(x[:n1]) - 1.0]))
-        return np.concatenate(parts)
+            out[n_eig:rows] = res[n_eig:] if self.w_defl == 1.0 \
+                else np.sqrt(self.w_defl) * res[n_eig:]
+        out[rows] = x[:n1].sum() - 1.0
+        return out
 
     def _compute(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, Callable[[], np.ndarray]]:
         if self._cache is not None and np.array_equal(self._cache[0], x):
@@ -248,13 +252,14 @@ class Objective:
             return self._jac[1]
         jac = cached[2]()
         n1 = self.problem.n_joints + 1
-        rows = [np.sqrt(self.w_eig) * jac[: self.n_eig]]
+        n_eig = self.n_eig
+        rows = jac.shape[0] if self.w_defl > 0.0 else n_eig
+        full = np.zeros((rows + 1, x.size))
+        full[:n_eig] = jac[:n_eig] if self.w_eig == 1.0 else np.sqrt(self.w_eig) * jac[:n_eig]
         if self.w_defl > 0.0:
-            rows.append(np.sqrt(self.w_defl) * jac[self.n_eig:])
-        gauge = np.zeros((1, x.size))
-        gauge[0, :n1] = 1.0
-        rows.append(gauge)
-        full = np.vstack(rows)
+            full[n_eig:rows] = jac[n_eig:] if self.w_defl == 1.0 \
+                else np.sqrt(self.w_defl) * jac[n_eig:]
+        full[rows, :n1] = 1.0
         self._jac = (cached, full)
         return full
 

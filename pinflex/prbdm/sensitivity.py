@@ -52,6 +52,9 @@ class WarmStarts:
     base: dict[int, np.ndarray] = field(default_factory=dict)
     slopes: dict[int, np.ndarray] = field(default_factory=dict)
     base_x: np.ndarray | None = None
+    # (loads, base angles, slopes) of the base stacked for one prediction of every load.
+    _stacked: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None,
+                                                                       repr=False)
 
     def clear(self) -> None:
         """Forget every stored start."""
@@ -59,6 +62,7 @@ class WarmStarts:
         self.base.clear()
         self.slopes.clear()
         self.base_x = None
+        self._stacked = None
 
     def set_base(self, x: np.ndarray, angles: dict[int, np.ndarray],
                  slopes: dict[int, np.ndarray]) -> None:
@@ -66,6 +70,9 @@ class WarmStarts:
         self.base_x = np.array(x, dtype=float)
         self.base = {k: np.array(v) for k, v in angles.items()}
         self.slopes = slopes
+        keys = np.array(sorted(k for k in slopes if k in self.base), dtype=int)
+        self._stacked = (keys, np.array([self.base[k] for k in keys]),
+                         np.array([slopes[k] for k in keys])) if keys.size else None
 
     def start(self, index: int, x: np.ndarray) -> np.ndarray:
         """Start angles of load ``index`` for design x (requires ``index in angles``)."""
@@ -75,6 +82,22 @@ class WarmStarts:
         step = slope @ (x - self.base_x)
         # A long extrapolation is no better than the last answer: keep predictions small.
         return self.base[index] + step if np.max(np.abs(step)) < 0.2 else self.angles[index]
+
+    def starts(self, x: np.ndarray, n_loads: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`start` of loads 0..n_loads-1 at once: angles (n_loads, n) and which exist."""
+        theta0 = np.zeros((n_loads, n))
+        have = np.zeros(n_loads, dtype=bool)
+        for index, angles in self.angles.items():
+            if index < n_loads:
+                theta0[index], have[index] = angles, True
+        stacked = self._stacked
+        if stacked is None or self.base_x is None or self.base_x.shape != x.shape:
+            return theta0, have
+        keys, base, slopes = stacked
+        step = slopes @ (x - self.base_x)
+        use = (np.abs(step).max(axis=1) < 0.2) & (keys < n_loads)
+        theta0[keys[use]] = base[use] + step[use]
+        return theta0, have
 
 
 def _thickness(planform: Planform, s: np.ndarray) -> np.ndarray:
@@ -503,12 +526,10 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
     scale = np.ones(n_loads)
     if solved:
         ell = lengths[1:]
-        theta0 = np.zeros((n_loads, n))
-        have = np.zeros(n_loads, dtype=bool)
         if warm is not None:
-            for index in warm.angles:
-                if index < n_loads:
-                    theta0[index], have[index] = warm.start(index, x), True
+            theta0, have = warm.starts(x, n_loads, n)
+        else:
+            theta0, have = np.zeros((n_loads, n)), np.zeros(n_loads, dtype=bool)
         if have.all():
             theta, ok = planar_statics(k_static, ell, forces, theta0, 1)
         elif have.any():
@@ -525,9 +546,9 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
             for k_load in np.flatnonzero(ok):
                 warm.angles[int(k_load)] = theta[k_load].copy()
         if ok.any():
-            qs = np.cumsum(theta[ok], axis=1)
-            tips[ok] = np.column_stack([s[0] + (ell * np.cos(qs)).sum(1),
-                                        -(ell * np.sin(qs)).sum(1)])
+            qs = theta[ok] @ _planar_indices(n).prefix
+            tips[ok, 0] = s[0] + np.cos(qs) @ ell
+            tips[ok, 1] = -(np.sin(qs) @ ell)
             defl_res[ok] = (tips[ok] - truth_tips[ok]) / scale[ok, None]
     norm_l = np.sqrt(max(n_loads, 1))
     residuals = np.concatenate([eig_res, defl_res.ravel() / norm_l])
@@ -624,20 +645,20 @@ def _tip_derivative(k_static: np.ndarray, theta: np.ndarray, forces: np.ndarray,
     n_l, n = theta.shape
     ix = _indices(n)
     n_p = ds_dx.shape[1] + factors.size
-    q = np.cumsum(theta, axis=1)
+    planar = _planar_indices(n)
+    q = theta @ planar.prefix
     ell = lengths[1:]
     c, sn = np.cos(q), np.sin(q)
     fx, fz = forces[:, :1], forces[:, 1:]
     s_mat = ix.tri
     # Tip Jacobian rows: d x_tip / d q_a = -l_a sin q_a, d z_tip / d q_a = -l_a cos q_a.
-    jac_x = (-ell * sn) @ s_mat
-    jac_z = (-ell * c) @ s_mat
+    tip_jac = np.empty((n_l, 2, n))
+    tip_jac[:, 0] = (-ell * sn) @ s_mat
+    tip_jac[:, 1] = (-ell * c) @ s_mat
     work = -sn * fx - c * fz                               # u'(q_a) . F
     idx = ix.idx
     arm = ell * (c * fx - sn * fz)                         # l_a u(q_a) . F
-    suffix = np.cumsum(arm[:, ::-1], axis=1)[:, ::-1]
-    tangent = suffix[:, ix.upper]
-    tangent[:, idx, idx] += k_static
+    tangent = (arm @ planar.suffix)[:, planar.top] + planar.eye * k_static
     dl_dx = ix.dl @ ds_dx                                  # (n, n1)
     scale = factors if law_segment else np.full(n, float(np.mean(factors)))
     dk_dx = np.zeros((n, n_p))
@@ -650,8 +671,7 @@ def _tip_derivative(k_static: np.ndarray, theta: np.ndarray, forces: np.ndarray,
     # (J^T F)_i = sum_{a >= i} l_a u'(q_a) . F depends on the lengths directly.
     dr[:, :, :n1] -= s_mat.T @ (work[:, :, None] * dl_dx[None, :, :])
     dtheta = -np.linalg.solve(tangent, dr)
-    dtip = np.stack([(jac_x[:, None, :] @ dtheta)[:, 0], (jac_z[:, None, :] @ dtheta)[:, 0]],
-                    axis=1)
+    dtip = tip_jac @ dtheta
     # Direct dependence on the geometry: P = (s_1, 0) + sum_a l_a u(q_a).
     dtip[:, 0, :n1] += c @ dl_dx + ds_dx[0]
     dtip[:, 1, :n1] += -sn @ dl_dx
