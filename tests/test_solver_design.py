@@ -152,11 +152,24 @@ def test_stiffness_jet_has_no_pose_terms_for_section_variables():
         np.testing.assert_allclose(Kh, np.eye(Kh.shape[0]), atol=1e-12)
 
 
-def test_locked_joints_stay_on_the_nodal_route():
-    """Locks eliminate joint coordinates (a pose-dependent map): not on the solver route."""
-    model = FlexibleModel(ROOT / "urdf" / "two_link.urdf", planar=True,
-                          joints={"q2": "locked"})
-    assert not solver_design.covered(model)
+def test_locked_and_sprung_joints_with_tube_variables_equal_the_nodal_route():
+    """Locked joints on the solver route, with section variables.
+
+    Benchmark geometry with q2 locked (at and off the nominal design), and the UR5 tubes with
+    the elbow locked and a wrist spring.
+    """
+    model = FlexibleModel(_bench_designed().description, planar=True, joints={"q2": "locked"})
+    assert model.n_rigid == 1 and model.ndof == model.nx + 1
+    for y in (None, model.y0 * np.array([1.1, 0.9, 1.05, 1.0])):
+        tm = expand(model, QA, y, order=4, modes=(1, 2), design=["d1", "d2", "E"])
+        ref = _nodal(model, QA, y, 4, ["d1", "d2", "E"], (1, 2))
+        assert _worst(tm.eigval_jets, ref, tm.space) < 1e-10
+    model = FlexibleModel(ROOT / "urdf" / "ur5_tubes.xml", values={"payload": 2.0},
+                          joints={"elbow_joint": "locked", "wrist_2_joint": 3e4})
+    assert solver_design.covered(model) and model.n_rigid == 4
+    design = ["D_upper", "D_fore"]
+    tm = expand(model, QU, order=3, modes=(1, 2, 3), design=design)
+    assert _worst(tm.eigval_jets, _nodal(model, QU, None, 3, design, (1, 2, 3)), tm.space) < 1e-10
 
 
 @pytest.mark.parametrize("factor", [1.0, 1.15])

@@ -850,10 +850,10 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
                                               design=design)
         rspace, keep = space, list(range(space.nvars))
     try:
-        if solver and K.ndim == 2:
+        if solver and K.ndim == 2 and not model._locked_joints:
             w, V = expansion_eigenpairs(model, M[0])
-        elif solver:  # design-dependent stiffness or springs: K(x0) is not blockdiag(I, 0)
-            w, V = solver_design.expansion_eigenpairs(model, K[0], M[0])
+        elif solver:  # design-dependent stiffness, springs or locks: not the plain layout
+            w, V = solver_design.expansion_eigenpairs(model, K if K.ndim == 2 else K[0], M[0])
         else:
             w, V = sla.eigh(K[0], M[0], check_finite=False)
     except np.linalg.LinAlgError as exc:

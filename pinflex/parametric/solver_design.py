@@ -47,10 +47,10 @@ _K_NAMES = ("EA", "GJ", "EIy", "EIz")
 def covered(model) -> bool:
     """Whether the solver-coordinate route takes this model's expansion.
 
-    Every design variable (point masses, sections, materials, joint stiffness) and free or
-    spring joints are covered; locked joints are not (they go through the nodal pencil).
+    Every design variable (point masses, sections, materials, joint stiffness) and every joint
+    condition (free, spring, locked) is covered; a model without elastic coordinates is not.
     """
-    return model.nx > 0 and not model._locked_joints
+    return model.nx > 0
 
 
 def _unit_tip(spec, name: str, nd: np.ndarray) -> np.ndarray:
@@ -176,7 +176,8 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
     channels = model.design_channels
-    if not channels and not model._spring_joints:
+    locks = bool(model._locked_joints)
+    if not channels and not model._spring_joints and not locks:
         return M, K0
     salg = solve._algebra(alg, 1)
     twists, sources = solve.factored_twists(model, plan, terms, salg)
@@ -252,7 +253,55 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
             unit = _link_mass(core, blocks[n], terms.jac[ch.owner], ep_cache[ch.owner], salg,
                               nx, nv, nd)
             M[pt] += unit[pa] * fc[pb][:, None, None]
+    if locks:
+        return _eliminate_locks(model, space, terms, salg, twists, sources, emb, M,
+                                K if stiff else None)
     return M, (K if stiff else K0)
+
+
+def _eliminate_locks(model, space: JetSpace, terms, salg, twists, sources, emb, M, K):
+    """``Tᵀ M T`` and ``Tᵀ K T`` over the modal coordinates ``[w; q_kept]`` (locked joints).
+
+    ``T`` maps ``[w; q_kept]`` to ``[w; q_all]`` (:func:`pinflex.erls.joints.transform`): the
+    identity on ``w`` and the kept joints, and on a locked joint's row ``q_L = C_LL⁻¹ (G_w w −
+    C_LK q_kept)`` with ``G_w`` the parent attachment's rotation about the joint axis in solver
+    coordinates (a pose jet). Only those few rows differ from a selection, so each side of the
+    congruence is a column scatter plus one thin jet product. ``K = None`` is the constant
+    ``blockdiag(I, 0)``, which ``T`` keeps (its ``w`` rows are ``[I, 0]``).
+    """
+    from pinflex.parametric.conditioned import SparseJetAlgebra
+
+    nx = model.nx
+    nd = nx + model.nv
+    ndof = model.ndof
+    T0 = model._lock_T0
+    rows = np.asarray(model._lock_rows, dtype=int)
+    others = np.setdiff1d(np.arange(nd), rows)
+    cols = np.argmax(T0[others], axis=1)  # each kept coordinate's modal column
+    G = np.stack([-spring_rows(model, terms, salg, twists, sources, j)[:, 0, :nx]
+                  for j in model._locked_joints], axis=1)  # (lead, nL, nx)
+    TL = np.zeros((space.ncoef, rows.size, ndof))
+    TL[0] = T0[rows]
+    TL[emb, :, :nx] += np.einsum("lm,cmx->clx", model._lock_inv, G)
+    alg = SparseJetAlgebra(space)
+
+    def right(X):  # X @ T for a jet X (ncoef, r, nd)
+        out = np.zeros(X.shape[:2] + (ndof,))
+        out[:, :, cols] = X[:, :, others]
+        return out + alg.mm(np.ascontiguousarray(X[:, :, rows]), TL)
+
+    def congruent(X):
+        XT = right(X)
+        return right(np.swapaxes(XT, 1, 2)).swapaxes(1, 2).copy()
+
+    Mm = congruent(M)
+    Mm = 0.5 * (Mm + np.swapaxes(Mm, 1, 2))
+    if K is None:
+        K0 = np.zeros((ndof, ndof))
+        K0[:nx, :nx] = np.eye(nx)
+        return Mm, K0
+    Km = congruent(K)
+    return Mm, 0.5 * (Km + np.swapaxes(Km, 1, 2))
 
 
 def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
@@ -273,14 +322,14 @@ def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
     from pinflex.exceptions import ConfigurationError
 
     nd = K0.shape[0]
-    nx = nd - model.nv
+    nx = model.nx
     Z = None
-    C = model.coord_map
-    if not np.array_equal(C, np.eye(model.nv)):
-        # absolute user angles: split free and sprung joints in relative values r = C q,
-        # where a free joint carries no stiffness (q = C⁻¹ r)
+    Winv = getattr(model, "_modal_Winv", None)
+    if Winv is not None:
+        # absolute user angles: split free and sprung joints in relative values r = W q_kept
+        # (:func:`pinflex.erls.joints.setup`), where a free joint carries no stiffness
         Z = np.eye(nd)
-        Z[nx:, nx:] = np.linalg.inv(C)
+        Z[nx:, nx:] = Winv
         K0, M0 = Z.T @ K0 @ Z, Z.T @ M0 @ Z
     e = np.asarray(model._elastic_cols, dtype=int)
     fr = np.asarray(model._rigid_cols, dtype=int)
