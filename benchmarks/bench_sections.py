@@ -8,10 +8,11 @@ wall time per call; ratios are per round (median and range).
 * benchmark A (planar, 2 joints): point masses m1, m2 against rod diameters d1, d2;
 * flexible UR5 (6 joints; the base pan joint does not enter the pencil and is left out of the
   recursion): payload against one tube diameter, one Young's modulus (both tubes), one joint
-  stiffness (elbow spring); payload + an elbow mass against the two tube diameters and
-  against a tube diameter + the elbow stiffness. Without ``--quick`` the nodal-coordinate
-  route that section variables took before (``matrix_jets`` + eigh + recursion) is timed for
-  the two tube diameters, and its coefficients are compared with the solver route's.
+  stiffness (elbow spring), and the payload with wrist 1 locked; payload + an elbow mass
+  against the two tube diameters and against a tube diameter + the elbow stiffness. Without
+  ``--quick`` the nodal-coordinate route that section variables took before (``matrix_jets``
+  + eigh + recursion) is timed for the two tube diameters, and its coefficients are compared
+  with the solver route's.
 
 Run: python benchmarks/bench_sections.py [--quick] [--json] [--order P]
 """
@@ -39,7 +40,7 @@ QU = np.array([0.0, -1.0, 1.2, 0.3, 0.5, 0.0])
 
 
 def _ur5_variants(folder: Path):
-    """UR5 overlays: two design masses; tubes with a modulus and an elbow spring parameter."""
+    """UR5 variants: two design masses; tubes with a modulus and an elbow spring; a lock."""
     import pinflex
 
     flex = (ROOT / "urdf" / "ur5_flexible.xml").read_text()
@@ -64,7 +65,9 @@ def _ur5_variants(folder: Path):
             pinflex.FlexibleModel(ROOT / "urdf" / "ur5_tubes.xml", values={"payload": 2.0}),
             pinflex.FlexibleModel(folder / "ur5_tubes_k.xml", values={"payload": 2.0}),
             pinflex.FlexibleModel(folder / "ur5_tubes_k.xml", values={"payload": 2.0},
-                                  joints="annotated"))
+                                  joints="annotated"),
+            pinflex.FlexibleModel(ROOT / "urdf" / "ur5_flexible.xml",
+                                  joints={"wrist_1_joint": "locked"}))
 
 
 def _bench_a():
@@ -117,7 +120,7 @@ def main(argv=None) -> int:
     order = args.order
     bench_mass, bench_sec = _bench_a()
     tmp = tempfile.TemporaryDirectory()
-    ur5, ur5_2m, tubes, tubes_e, tubes_k = _ur5_variants(Path(tmp.name))
+    ur5, ur5_2m, tubes, tubes_e, tubes_k, ur5_lock = _ur5_variants(Path(tmp.name))
 
     def ex(model, q, design=None):
         return lambda: pinflex.expand(model, q, order=order, design=design)
@@ -127,6 +130,7 @@ def main(argv=None) -> int:
         ("UR5: D_upper vs payload", ex(ur5, QU), ex(tubes, QU, ["D_upper"]), 7),
         ("UR5: E (both tubes) vs payload", ex(ur5, QU), ex(tubes_e, QU, ["E_tube"]), 7),
         ("UR5: k_elbow vs payload", ex(ur5, QU), ex(tubes_k, QU, ["k_elbow"]), 7),
+        ("UR5 payload: wrist 1 locked vs free", ex(ur5, QU), ex(ur5_lock, QU), 7),
         ("UR5: D_upper, D_fore vs payload, elbow mass", ex(ur5_2m, QU),
          ex(tubes, QU, ["D_upper", "D_fore"]), 8),
         ("UR5: D_upper, k_elbow vs payload, elbow mass", ex(ur5_2m, QU),
