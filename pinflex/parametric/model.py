@@ -5,7 +5,7 @@ from __future__ import annotations
 import threading
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from types import MappingProxyType
 
 import numpy as np
@@ -63,7 +63,8 @@ class TaylorModel:
             mode against its spectral neighbours, or None without a spectrum (derived).
 
     A Taylor model never changes after construction: every array is a read-only copy, and
-    the derived fields are computed once, when it is built.
+    the derived fields are computed once, when it is built. It pickles (process pools, Dask
+    batches): only the defining fields are stored, the derived ones are rebuilt on loading.
     """
 
     space: JetSpace
@@ -114,6 +115,17 @@ class TaylorModel:
         W = spectral_weights(self.modes, self.spectrum, self.spectrum_slopes)
         object.__setattr__(self, "spectral_weights", None if W is None else _readonly(W))
         object.__setattr__(self, "evaluation_plan", _EvaluationPlan.build(self))
+
+    def __reduce__(self):
+        """Pickle the defining fields only (for process pools, Dask, files).
+
+        The derived fields (coefficient matrices, degree blocks, the evaluation plan with its
+        lock and scratch rows) are rebuilt by the constructor on loading, and
+        ``order_choice`` is read-only again.
+        """
+        kw = {f.name: getattr(self, f.name) for f in fields(self) if f.init}
+        kw["order_choice"] = _plain(self.order_choice)
+        return (_rebuild_taylor_model, (kw,))
 
     @property
     def order(self) -> int:
@@ -468,6 +480,27 @@ class TaylorModel:
         dq = self.offsets(Q, None)[:, : len(self.joint_idx)]
         mon = jets.monomials(qspace, dq)
         return mon @ l0, np.einsum("nc,jck->nkj", mon, l1)
+
+
+def _plain(value):
+    """Read-only mappings as plain dicts, recursively (they do not pickle)."""
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def _frozen(value):
+    """Plain dicts as read-only mappings, recursively (the inverse of :func:`_plain`)."""
+    if isinstance(value, dict):
+        return MappingProxyType({k: _frozen(v) for k, v in value.items()})
+    return value
+
+
+def _rebuild_taylor_model(kw: dict) -> TaylorModel:
+    """A pickled :class:`TaylorModel` from its defining fields."""
+    kw = dict(kw)
+    kw["order_choice"] = _frozen(kw["order_choice"])
+    return TaylorModel(**kw)
 
 
 @dataclass(frozen=True)
