@@ -150,14 +150,20 @@ def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int,
         pose += [terms, alg]
     zeros = (0,) * nd
     emb = np.array([space.index[a + zeros] for a in alphas])
+    # only design point masses have a mass per unit value (section parameters: zero); add
+    # them in the joints' space before the one embedding copy
+    index = getattr(model, "_mass_design_index", None)  # as solve.mass reads it
+    masses = list(range(model.ny)) if index is None else sorted(set(index.values()))
+    for j in masses:
+        if y0[j] != 0.0:
+            Mq += y0[j] * Mdq[j]
     M = np.zeros((space.ncoef,) + Mq.shape[1:])
     M[emb] = Mq
-    for j in range(model.ny):
-        M[emb] += y0[j] * Mdq[j]
+    low = [i for i, a in enumerate(alphas) if sum(a) < order]
+    for j in masses:
         if j in design_idx:
             k = design_idx.index(j)
             unit = tuple(int(i == k) for i in range(nd))
-            low = [i for i, a in enumerate(alphas) if sum(a) < order]
             shifted = np.array([space.index[alphas[i] + unit] for i in low], dtype=int)
             M[shifted] += Mdq[j][low]
     return space, M
