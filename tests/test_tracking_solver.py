@@ -124,3 +124,18 @@ def test_design_only_lead_in_and_named_errors(two_link):
     np.testing.assert_allclose(b.mac_reference, a.mac_reference, atol=1e-10)
     with pytest.raises(ConfigurationError):
         track_modes(two_link, Q[:3], coordinates="modal")
+
+
+def test_models_the_conditioned_solve_lacks_are_tracked_on_the_nodal_pencil():
+    """Joint springs: 'auto' falls back to the nodal pencil, 'solver' says it cannot."""
+    from reference_fe import planar_two_link_frequencies
+
+    model = FlexibleModel(TWO_LINK, planar=True, joints={"q1": 4.0e3, "q2": 1.5e3})
+    assert not solve.supported(model)
+    Q = Q0_A + np.linspace(0.0, 0.3, 5)[:, None] * np.array([0.0, 1.0])
+    tr = track_modes(model, Q, modes=(1, 2))
+    for q, f in zip(Q, tr.freq_hz):
+        _, f_ref = planar_two_link_frequencies(q, 0.125, 0.125, joints=[4.0e3, 1.5e3])
+        np.testing.assert_allclose(f, f_ref[:2], rtol=1e-9)
+    with pytest.raises(ConfigurationError, match="conditioned solve"):
+        track_modes(model, Q, modes=(1, 2), coordinates="solver")
