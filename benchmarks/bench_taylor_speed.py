@@ -168,10 +168,15 @@ def section_end_to_end(out, a, traj, rounds):
                       "max_s": float(total.max()),
                       "stages_median_s": {k: float(np.median([r[k] for r in rows]))
                                           for k in keys}}
+    ratio = e2e["cpu"]["median_s"] / float(np.median(floor))
     print(f"   exact frequencies of the same 152 poses (FlexibleModel.frequencies, 4 modes, "
-          f"CPU): {1e3 * np.median(floor):.1f} ms median")
+          f"CPU): {1e3 * np.median(floor):.1f} ms median; end to end / that sweep "
+          f"{ratio:.2f}x, exact verification / that sweep "
+          f"{e2e['cpu']['stages_median_s']['exact_verification'] / float(np.median(floor)):.2f}x"
+          " (CPU medians)")
     out["end_to_end"] = {**e2e["wall"], "cpu": e2e["cpu"],
-                         "frequencies_152_cpu_median_s": float(np.median(floor))}
+                         "frequencies_152_cpu_median_s": float(np.median(floor)),
+                         "cpu_ratio_to_frequencies": ratio}
 
 
 if __name__ == "__main__":

@@ -4,7 +4,9 @@ Mode identity. A target "mode i" is the mode numbered i (sorted, non-rigid) **at
 expansion point** ``(q0, y0)`` of the Taylor model: that is the branch the Taylor series and
 the QP follow. The exact model is checked on the same branch: each verified design is
 tracked by shape (:func:`pinflex.tracking.track_modes`) from the expansion point, along the
-design change at ``q0`` and then along the trajectory. Where a target mode crosses or veers
+design change at ``q0`` and then along the trajectory (in the conditioned solve's coordinates
+where it covers the model, with shapes mapped between poses so that the MACs are the nodal
+ones; else on the nodal pencil). Where a target mode crosses or veers
 with another one, the sorted "mode i" of the exact model is a different physical mode on
 part of the trajectory; both errors are kept (tracked and sorted) and a
 :class:`~pinflex.exceptions.ModeCrossingWarning` says so.
