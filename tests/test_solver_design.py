@@ -189,3 +189,87 @@ def test_expansion_eigenpairs_solve_the_pencil(factor):
     assert np.max(np.abs(K[0] @ V[:, 0])) < 1e-9 * np.abs(K[0]).max()  # the free joint
     ref = sla.eigh(K[0], M[0], eigvals_only=True)
     np.testing.assert_allclose(w[1:4], ref[1:4], rtol=1e-9)
+
+
+def _along(tm, rays):
+    """Coefficients in t (order p) of λ(x0 + δx(t)), ``rays[v]`` the series of δx_v in t."""
+    p = tm.space.order
+    out = np.zeros((p + 1, tm.eigval_jets.shape[1]))
+    for alpha, coef in zip(tm.space.multi_indices, tm.eigval_jets):
+        ser = np.zeros(p + 1)
+        ser[0] = 1.0
+        for v, power in enumerate(alpha):
+            for _ in range(power):
+                ser = np.convolve(ser, rays[v])[: p + 1]
+        out += ser[:, None] * coef[None, :]
+    return out
+
+
+def _ray(p, *coefs):
+    out = np.zeros(p + 1)
+    out[1 : 1 + len(coefs)] = coefs
+    return out
+
+
+_ROD = """<robot name="sprung_rod" xmlns:pinflex="urn:pinflex:urdf:1">
+  <link name="base"/><link name="rod"/>
+  <joint name="q" type="revolute"><parent link="base"/><child link="rod"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <pinflex:parameter name="d" value="0.02" lower="0.01" upper="0.04" design="true"/>
+  <pinflex:parameter name="k" value="800" lower="100" upper="1e5" design="true"/>
+  <pinflex:flexible link="rod" elements="8" tip="0.8 0 0" normal="0 0 1">
+    <pinflex:material E="7e10" poisson="0.33" density="2700"/>
+    <pinflex:section shape="solid_circle" diameter="{d}"/>
+  </pinflex:flexible>
+  <pinflex:joint name="q" stiffness="{k}"/>
+</robot>"""
+
+
+def test_sprung_rod_follows_the_exact_scaling_of_diameter_and_stiffness():
+    """λ(d s, k s⁴) = s² λ(d, k) for a straight rod on a root spring (bending modes, planar).
+
+    Bending stiffness ∝ d⁴, the spring ∝ s⁴, every mass ∝ d² (no rotary inertia in planar
+    bending, no other mass): an exact law of the discrete model, so along the curve
+    d = d0 (1 + t), k = k0 (1 + t)⁴ the coefficients in t are λ0 (1, 2, 1, 0, 0) exactly. It
+    checks the mixed section-spring coefficients up to order 4 without any reference solver.
+    """
+    model = FlexibleModel(parse(_ROD), planar=True, joints="annotated")
+    assert model.n_rigid == 0
+    tm = expand(model, [0.0], order=4, modes=(1, 2, 3), joints=[])
+    d0, k0 = model.y0
+    got = _along(tm, [_ray(4, d0), _ray(4, 4 * k0, 6 * k0, 4 * k0, k0)])
+    want = np.outer([1.0, 2.0, 1.0, 0.0, 0.0], tm.eigval_jets[0])
+    assert np.max(np.abs(got - want) / tm.eigval_jets[0]) < 1e-10
+
+
+def test_two_link_arm_follows_the_exact_scaling_of_modulus_density_and_stiffness():
+    """Along a pose ray: λ(q(t), E s, k s) = s λ(q(t)) and λ(q(t), ρ s) = λ(q(t)) / s.
+
+    Benchmark A's geometry with beams only (no other mass), both diameters, E, ρ and the q2
+    spring as design variables: stiffness is ∝ E and k, mass ∝ ρ, exactly, at every pose. With
+    q = q0 + a t and s = 1 + t the series in t of the full expansion must equal (1 + t) (resp.
+    1/(1 + t)) times the series of the joint-only terms: the mixed joint-design coefficients to
+    order 4, against an identity of the discrete model.
+    """
+    text = two_link(
+        'shape="solid_circle" diameter="{d1}"',
+        'shape="hollow_circle" outer_diameter="{d2}" wall="0.002"',
+        params='<pinflex:parameter name="d1" value="0.03" lower="0.02" upper="0.06" '
+        'design="true"/><pinflex:parameter name="d2" value="0.03" lower="0.02" upper="0.06" '
+        'design="true"/><pinflex:parameter name="E" value="69e9" lower="5e10" upper="8e10" '
+        'design="true"/><pinflex:parameter name="rho" value="2687" lower="1e3" upper="9e3" '
+        'design="true"/><pinflex:parameter name="k2" value="2000" lower="500" upper="1e4" '
+        'design="true"/>',
+        material='E="{E}" poisson="0.3" density="{rho}"',
+        joints='<pinflex:joint name="q2" stiffness="{k2}"/>')
+    model = FlexibleModel(parse(text), planar=True, joints="annotated")
+    tm = expand(model, QA, order=4, modes=(1, 2))
+    _, _, E0, rho0, k0 = model.y0
+    a = (_ray(4, 0.3), _ray(4, -0.5))
+    z = np.zeros(5)
+    pose_only = _along(tm, [*a, z, z, z, z, z])
+    for rays, factor in (([*a, z, z, _ray(4, E0), z, _ray(4, k0)], [1, 1, 0, 0, 0]),
+                         ([*a, z, z, z, _ray(4, rho0), z], [1, -1, 1, -1, 1])):
+        got = _along(tm, rays)
+        want = np.stack([np.convolve(factor, pose_only[:, j])[:5] for j in range(2)], axis=1)
+        assert np.max(np.abs(got - want) / tm.eigval_jets[0]) < 1e-10
