@@ -56,7 +56,7 @@ class PiecewiseTaylor:
         reference: Index of the model whose point numbers the modes.
         points_choice: ``{"tol", "points", "order", "estimate", "exact_error", "candidates",
             "method"}``: the tolerance, the expansion samples, the order, the largest
-            next-order estimate over the samples, the exact relative error of the cover at
+            two-term estimate over the samples, the exact relative error of the cover at
             ``y0``, ``{order: number of points}`` tried, and how it was chosen.
     """
 
@@ -180,12 +180,13 @@ def points_for_tolerance(model, Q: np.ndarray, y0: np.ndarray, *, tol: float,
               "estimate": float(cover.estimate) if cover.estimate is not None else None,
               "exact_error": float(cover.max_error),
               "candidates": {int(k): int(v) for k, v in cover.candidates.items()},
-              "method": "next-order estimate |T_(p+1) - T_p| / |T_(p+1)| at every sample at "
-                        "y0; fewest points, then lowest order"}
+              "method": "two-term estimate max(|T_(p+1) - T_p| / |T_(p+1)|, "
+                        "|T_(p+2) - T_(p+1)| / |T_(p+2)|) at every sample at y0; fewest "
+                        "points, then lowest order"}
     if cover.max_error > tol:
         warnings.warn(
             f"expansion points for tol {tol:g}: the exact relative error of the cover at y0 is "
-            f"{cover.max_error:.3g} (largest next-order estimate {choice['estimate']:.3g}): "
+            f"{cover.max_error:.3g} (largest two-term estimate {choice['estimate']:.3g}): "
             "the estimate was optimistic there; use a smaller tolerance",
             TaylorRadiusWarning, stacklevel=2)
     return PiecewiseTaylor(models, tuple(cover.segments), tuple(centres), ref, choice)

@@ -32,7 +32,8 @@ def add_parser(sub) -> None:
     p.add_argument("--points-tol", type=float, default=None, metavar="TOL",
                    help="expand at several points instead of the study's q0: the fewest "
                    "expansion points along the trajectory (then the lowest order, 1-8) whose "
-                   "next-order estimate of the relative frequency error meets TOL at every "
+                   "estimate of the relative frequency error (the larger of the next two "
+                   "orders' terms) meets TOL at every "
                    "sample at y0; each sample's QP rows come from its segment's model; reports "
                    "the points, the order, the estimate and the exact error of the cover")
     add_model_arguments(p, default_joints=None)
@@ -163,7 +164,7 @@ def cmd_assign(args: argparse.Namespace) -> int:
     if points is not None:
         print(f"Taylor expansion points for --points-tol {points['tol']:g}: "
               f"{len(points['points'])} at samples {points['points']}, order {points['order']} "
-              f"(largest next-order estimate {points['estimate']:.3g}; exact error of the "
+              f"(largest two-term estimate {points['estimate']:.3g}; exact error of the "
               f"cover {points['exact_error']:.3g} along the trajectory at y0)")
     print(f"max error (exact model): {100 * result.max_error_before:.2f} % -> "
           f"{100 * result.max_error_after:.2f} % "
