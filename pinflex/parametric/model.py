@@ -348,6 +348,8 @@ class TaylorModel:
                         if not checked:
                             return run(Qa.T, coef)
                         value, t2 = run(Qa.T, coef)
+                        if t2 <= grid.limits.get((quantity, linear_in_design, tol), -1.0):
+                            return value  # screen 1 (see _PowerGrid)
                         return self._grid_checked(value, t2, P, Qa, quantity, linear_in_design,
                                                   strict, tol)
                     finally:
@@ -393,11 +395,8 @@ class TaylorModel:
         grid = plan.grid
         key = (quantity, bool(linear))
         # screen 1: the largest A-norm of the offsets against the norm at which the bound
-        # of the estimate reaches tol
-        limit = grid.limits.get((key, tol))
-        if limit is None:
-            limit = grid.limit(key, tol, plan.screen_passes)
-        if t2 <= limit:
+        # of the estimate reaches tol (the caller tried the cached level)
+        if t2 <= grid.limit(key, tol, plan.screen_passes):
             return value
         # screen 2: every check row at every sample, the column-maximum screen
         rows = grid.checked.get(key)
@@ -726,8 +725,11 @@ class _PowerGrid:
                    q0=tm.q0.copy())
 
     def limit(self, key, tol: float, screen) -> float:
-        """Largest ``max τ²`` that passes screen 1 at ``tol`` (cached per tolerance)."""
-        found = self.limits.get((key, tol))
+        """Largest ``max τ²`` that passes screen 1 at ``tol``.
+
+        Cached in :attr:`limits` as ``{(quantity, linear, tol): level}`` (-1: never passes).
+        """
+        found = self.limits.get((*key, tol))
         if found is not None:
             return found
         bound = self.bounds.get(key)
@@ -753,7 +755,7 @@ class _PowerGrid:
                     limit = lo * lo * (1.0 - 1e-9)
         if len(self.limits) >= 32:
             self.limits.clear()
-        self.limits[key, tol] = limit
+        self.limits[(*key, tol)] = limit
         return limit
 
     def new_scratch(self, n: int, checked: bool, keep: bool = True):
@@ -772,7 +774,7 @@ class _PowerGrid:
         steps = tuple((P[j // 2], P[j - j // 2], P[j]) for j in range(2, p + 1))
         G2 = np.zeros((k * (p + 1), W * n))  # G = C Y in the first n columns, zeros after
         H2 = np.empty_like(G2)
-        G, P2 = G2[:, :n], P.reshape(p + 1, W * n)
+        G, P2, H = G2[:, :n], P.reshape(p + 1, W * n), H2[:, :n]
         Gm: np.ndarray
         Hm: np.ndarray
         S: np.ndarray
@@ -790,8 +792,8 @@ class _PowerGrid:
                 mm(coef, Y, out=G)  # G = C Y
                 mul(Gm, P2, Hm)  # H = G ⊙ X (and zeros ⊙ Y)
                 if k == 1:
-                    return dot(S, H2)[:n, None]  # Σ_a H[a]
-                return dot(S, H2)[:, :n].T
+                    return dot(S, H)[:, None]  # Σ_a H[a]
+                return dot(S, H).T
         else:
             x, y, xy = P[1, 0], P[1, 1], P[1, 2]
             form = self.form
@@ -804,7 +806,7 @@ class _PowerGrid:
                     mul(a, b, out)
                 mm(coef, Y, out=G)
                 mul(Gm, P2, Hm)
-                value = dot(S, H2)[:n, None] if k == 1 else dot(S, H2)[:, :n].T
+                value = dot(S, H)[:, None] if k == 1 else dot(S, H).T
                 return value, mx(dot(form, block))
         entry = (run, P)
         if keep:
