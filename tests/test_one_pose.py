@@ -65,7 +65,8 @@ def test_one_pose_mass_equals_the_block_assembly(models):
         for y in ys:
             ref = solve.mass(model, terms, y, 1)[0]
             got, S = solve.mass_one(model, layout, terms, twist, y)
-            assert S.shape == (layout.S0.shape[0], model.nx + model.nv)
+            rows = layout.S0.shape[0] if layout.keep is None else layout.keep.size
+            assert S.shape == (rows, model.nx + model.nv)
             assert np.abs(got - ref).max() <= 1e-14 * np.abs(ref).max(), name
 
 
@@ -204,3 +205,33 @@ def test_one_pose_root_twists_equal_the_batched_ones(models):
                 assert got[link] is None, (name, link)
             else:
                 np.testing.assert_allclose(got[link], e, rtol=0, atol=1e-15 * np.abs(e).max())
+
+
+def test_planar_rows_left_out_are_zero_at_every_pose():
+    """The rows a planar model leaves out of the one-pose products are zero at any pose.
+
+    They are the out-of-plane components (link axes) of the root twists and frame Jacobians;
+    the model decides them from its plane and link axes, this checks them at random poses
+    and design values (and that spatial models leave nothing out).
+    """
+    planar = FlexibleModel(TWO_LINK, planar=True)
+    layout = solve.one_pose_layout(planar)
+    dropped = np.setdiff1d(np.arange(layout.S0.shape[0]), layout.keep)
+    assert dropped.size == 12  # 3 components x (root, frame) x 2 links
+    rng = np.random.default_rng(4)
+    plan = solve.solve_plan(planar)
+    nx = planar.nx
+    for _ in range(20):
+        q = rng.uniform(-3, 3, size=2)
+        terms = planar.pose_terms_one(q)
+        twist = solve.root_twists_one(planar, plan, terms)
+        S = layout.S0.copy()  # the fill of mass_one, before the rows are gathered
+        for link, re, rj in layout.beams:
+            if twist[link] is not None:
+                S[re : re + 6, :nx] = twist[link][0]
+            S[rj : rj + 6, nx:] = terms.jac[link][0]
+        scale = np.abs(S).max()
+        assert np.abs(S[dropped]).max() <= 1e-14 * scale
+        assert np.abs(S[layout.keep]).max() > 0.1 * scale
+    for spatial in (FlexibleModel(TWO_LINK), FlexibleModel(UR5)):
+        assert solve.one_pose_layout(spatial).keep is None

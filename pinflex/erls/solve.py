@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from pinflex import beam
 from pinflex.erls.terms import offset_block
@@ -45,6 +46,16 @@ from pinflex.exceptions import EigenSolverError
 from pinflex.linalg import rotate_twist, translate_twist
 
 _EPS = np.finfo(float).eps
+_LINALG: tuple | None = None  # (scipy.linalg.blas, scipy.linalg.lapack), imported on first use
+
+
+def _linalg() -> tuple:
+    """SciPy's BLAS and LAPACK wrappers (imported once, on the first one-pose solve)."""
+    global _LINALG
+    from scipy.linalg import blas, lapack
+
+    _LINALG = (blas, lapack)
+    return _LINALG
 
 
 @dataclass(frozen=True)
@@ -484,9 +495,18 @@ class OnePoseLayout:
     Each mass carrier owns rows of ``S`` (its kinematic variables as rows over ``[w; q]``):
     a beam its own coordinates (identity on its columns), its root twist (6) and its frame
     twist (6, the Jacobian on the joint columns), weighted by the beam's constant
-    ``Aᵀ M_link A``; a rigid inertia its frame twist (6), weighted by the spatial inertia; a
-    point mass its velocity (3), weighted by its mass. ``S0`` holds the constant entries,
-    ``W0`` the constant weights (design masses are set per call).
+    ``Aᵀ M_link A``; a rigid inertia its frame twist (6), weighted by the spatial inertia. A
+    point mass on a link that owns rows moves with them: its velocity is ``T`` times those
+    rows (``T = [const, lin, to_point]`` on a beam's rows, ``to_point`` on an inertia's), so
+    it adds ``m TᵀT`` to their weight block instead of rows of its own (``folded``:
+    ``(design column, first row, TᵀT)`` of the design masses, added per call); a point mass
+    on a link without rows keeps its velocity (3) as rows, weighted by its mass. ``S0`` holds
+    the constant entries, ``W0`` the constant weights (design masses are set per call).
+
+    Planar models: the out-of-plane components of every root and frame twist are zero at
+    every pose (:func:`_planar_zero_rows`); those rows stay in ``S0`` (the per-pose fill
+    writes whole twists) and ``keep`` lists the others, the rows ``W0``, ``A``, ``A_el`` and
+    ``F`` are laid out on and :func:`mass_one` returns.
 
     For the mode shapes: ``A2 = [A; A_el]``, ``A`` mapping the rows of ``S`` to the node
     twists of every beam (beam axes; ``[C, R, J_frame]`` of each beam, its nodes stacked in
@@ -500,10 +520,11 @@ class OnePoseLayout:
     """
 
     __slots__ = ("S0", "W0", "beams", "inertias", "masses", "design_diag", "design_cols",
-                 "A2", "X", "node_links", "node_slices", "F", "field_rows")
+                 "A2", "X", "node_links", "node_slices", "F", "field_rows", "folded", "keep")
 
     def __init__(self, S0, W0, beams, inertias, masses, design_diag, design_cols, A2, X,
-                 node_links, node_slices, F, field_rows):
+                 node_links, node_slices, F, field_rows, folded=(), keep=None):
+        self.folded, self.keep = folded, keep
         self.S0, self.W0 = S0, W0
         self.beams, self.inertias, self.masses = beams, inertias, masses
         self.design_diag, self.design_cols = design_diag, design_cols
@@ -523,8 +544,10 @@ def one_pose_layout(model) -> OnePoseLayout | None:
     plan = solve_plan(model)
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
+    carriers = set(plan.cores) | set(model.plan.inertias)  # links that own rows
+    own_rows = [pm.link not in carriers for pm in model.plan.point_masses]
     n_rows = (sum(c.stop - c.start + 12 for c in plan.cores.values())
-              + 6 * len(model.plan.inertias) + 3 * len(model.plan.point_masses))
+              + 6 * len(model.plan.inertias) + 3 * sum(own_rows))
     if n_rows > ONE_POSE_MAX_ROWS:
         model.__dict__["_one_pose_layout"] = None
         return None
@@ -537,10 +560,12 @@ def one_pose_layout(model) -> OnePoseLayout | None:
     node_links: list[int] = []
     node_slices: dict[str, tuple[int, int]] = {}
     beams, inertias, masses = [], [], []
+    blocks_of: dict[str, tuple[int, int]] = {}  # link -> (first row, rows) of its block
     r = 0
     t = 0
     for link, c in plan.cores.items():
         o = c.stop - c.start
+        blocks_of[link] = (r, o + 12)
         S0[r : r + o, c.start : c.stop] = np.eye(o)
         W0[r : r + o + 12, r : r + o + 12] = np.block([
             [c.H_oo, c.H_oe, c.H_ov],
@@ -561,12 +586,33 @@ def one_pose_layout(model) -> OnePoseLayout | None:
     for link, inertia in model.plan.inertias.items():
         W0[r : r + 6, r : r + 6] = inertia
         inertias.append((link, r))
+        blocks_of.setdefault(link, (r, 6))
         r += 6
     design_index = getattr(model, "_mass_design_index", None)
     if design_index is None:
         design_index = {d.name: i for i, d in enumerate(model.design)}
-    diag, cols = [], []
-    for pm, att in zip(model.plan.point_masses, plan.pm_attach):
+    diag, cols, folded = [], [], []
+    for pm, att, own in zip(model.plan.point_masses, plan.pm_attach, own_rows):
+        if not own:  # velocity = T (rows of its link's block): weight m TᵀT on that block
+            r0, size = blocks_of[pm.link]
+            to_point = translate_twist(pm.xyz)[:3]
+            if pm.link in plan.cores:
+                core = plan.cores[pm.link]
+                o = core.stop - core.start
+                T = np.zeros((3, size))
+                if att.const is not None:
+                    T[:, att.start - core.start : att.stop - core.start] = att.const[:3]
+                T[:, o : o + 6] = att.lin[:3]
+                T[:, o + 6 : o + 12] = to_point
+            else:  # a rigid inertia's rows: [elastic root twist | frame twist] = its twist
+                T = to_point
+            B = T.T @ T
+            B.setflags(write=False)
+            if pm.name in design_index:
+                folded.append((design_index[pm.name], r0, r0 + size, B))
+            else:
+                W0[r0 : r0 + size, r0 : r0 + size] += model.point_mass_values[pm.name] * B
+            continue
         if att.const is not None:
             S0[r : r + 3, att.start : att.stop] = att.const[:3]
         idx = np.arange(r, r + 3)
@@ -577,6 +623,31 @@ def one_pose_layout(model) -> OnePoseLayout | None:
             W0[idx, idx] = model.point_mass_values[pm.name]
         masses.append((pm.link, r, att.lin[:3], translate_twist(pm.xyz)[:3]))
         r += 3
+    # planar models: rows of S that are zero at every pose leave the products (kept in S0,
+    # which the per-pose fill addresses; mass_one gathers the others)
+    diag_idx = np.concatenate(diag) if diag else np.zeros(0, int)
+    keep = None
+    drop = _planar_zero_rows(model, beams, inertias)
+    if drop.size:
+        keep = np.setdiff1d(np.arange(n_rows), drop)
+        pos = np.full(n_rows, -1)
+        pos[keep] = np.arange(keep.size)
+        W0 = np.ascontiguousarray(W0[np.ix_(keep, keep)])
+        A, A_el = A[:, keep], A_el[:, keep]
+        if diag_idx.size:  # own-row design masses: in-plane and out-of-plane rows alike
+            rows_d = diag_idx // (n_rows + 1)
+            if np.any(pos[rows_d] < 0):  # pragma: no cover - velocity rows are never dropped
+                raise AssertionError("a design mass row was dropped")
+            diag_idx = pos[rows_d] * (keep.size + 1)
+        compact = []
+        for d, r0, r1, B in folded:
+            local = np.flatnonzero(pos[r0:r1] >= 0)
+            Bk = np.ascontiguousarray(B[np.ix_(local, local)])
+            Bk.setflags(write=False)
+            compact.append((d, int(pos[r0 + local[0]]), int(pos[r0 + local[0]]) + local.size,
+                            Bk))
+        folded = compact
+        keep.setflags(write=False)
     X = A_el[x_index]
     A2 = np.concatenate([A, A_el])
     links = np.array(node_links + node_links, dtype=int)
@@ -589,12 +660,41 @@ def one_pose_layout(model) -> OnePoseLayout | None:
     F = np.ascontiguousarray(np.concatenate(blocks))
     for a in (S0, W0, A2, X, links, F):
         a.setflags(write=False)
-    layout = OnePoseLayout(S0, W0, tuple(beams), tuple(inertias), tuple(masses),
-                           np.concatenate(diag) if diag else np.zeros(0, int),
+    layout = OnePoseLayout(S0, W0, tuple(beams), tuple(inertias), tuple(masses), diag_idx,
                            np.concatenate(cols) if cols else np.zeros(0, int),
-                           A2, X, links, node_slices, F, field_rows)
+                           A2, X, links, node_slices, F, field_rows, tuple(folded), keep)
     model.__dict__["_one_pose_layout"] = layout
     return layout
+
+
+def _planar_zero_rows(model, beams, inertias) -> np.ndarray:
+    """Rows of the one-pose ``S`` that a planar model keeps at zero at every pose.
+
+    In a planar model (every revolute axis along the plane normal ``n``, beams' normals
+    along it, prismatic axes in the plane; checked when the model was built) each link turns
+    about ``n`` only, so ``n`` has the same coordinates in the link's axes at every pose, and
+    the in-plane beams deform in the plane. Where those coordinates are ``±e_i`` (``i`` one
+    axis of the link), every twist in link axes (``[v; ω]``: the elastic root twist, the
+    frame twist and its Jacobian) has ``v_i = 0`` and ``ω_j = 0`` for the other two axes
+    ``j``: those rows of the link's root- and frame-twist blocks are zero at every pose.
+    Links whose axes are not aligned with ``n`` keep all rows. Returns the row indices.
+    """
+    normal = model.plane_normal
+    if normal is None:
+        return np.zeros(0, int)
+    data = model.model.createData()
+    pin.framesForwardKinematics(model.model, data, pin.neutral(model.model))
+    ids = model.plan.frame_ids
+    rows: list[int] = []
+    starts = [(link, (re, rj)) for link, re, rj in beams] + [(link, (r,)) for link, r in inertias]
+    for link, firsts in starts:
+        local = data.oMf[ids[link]].rotation.T @ normal
+        i = int(np.argmax(np.abs(local)))
+        if abs(abs(local[i]) - 1.0) > 1e-12:
+            continue
+        zero = [i] + [3 + j for j in range(3) if j != i]
+        rows += [r0 + z for r0 in firsts for z in zero]
+    return np.array(sorted(rows), dtype=int)
 
 
 def mass_one(model, layout: OnePoseLayout, terms, twist: dict, y: np.ndarray):
@@ -628,13 +728,20 @@ def mass_one(model, layout: OnePoseLayout, terms, twist: dict, y: np.ndarray):
         if e is not None:
             S[r : r + 3, :nx] += lin @ e[0]
         S[r : r + 3, nx:] = to_point @ jac[link][0]
-    if layout.design_diag.size:
+    if layout.design_diag.size or layout.folded:
         W = layout.W0.copy()
-        W.flat[layout.design_diag] = y[layout.design_cols]
+        if layout.design_diag.size:
+            W.flat[layout.design_diag] = y[layout.design_cols]
+        for d, r0, r1, B in layout.folded:  # design masses moving with their link's rows
+            W[r0:r1, r0:r1] += y[d] * B
     else:
         W = layout.W0
+    if layout.keep is not None:
+        S = S[layout.keep]  # (rows zero at every pose left out)
     M = S.T @ (W @ S)
-    return 0.5 * (M + M.T), S
+    M += M.T  # (NumPy buffers the overlapping transpose)
+    M *= 0.5
+    return M, S
 
 
 def condense(model, M: np.ndarray):
@@ -833,9 +940,7 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
         :func:`eigvals`) directly over ``[x; q]`` (nd, k - r). The q part is the condensed
         rigid-coordinate response.
     """
-    import scipy.linalg
-    from scipy.linalg import blas, lapack
-
+    blas, lapack = _LINALG or _linalg()
     nx = model.nx
     k = nx if n_modes is None else min(int(n_modes), nx)
     nd = M.shape[-1]
@@ -862,6 +967,8 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
             raise EigenSolverError("the symmetric eigensolver did not converge: the mass of the "
                                    "model is not finite")
     else:
+        import scipy.linalg
+
         mu, V = scipy.linalg.eigh(Bred, lower=True, subset_by_index=[nx - k, nx - 1],
                                   driver="evr", check_finite=False)
     mu, V = mu[::-1], V[:, ::-1]
@@ -871,11 +978,11 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
     # as resolved(): mu is sorted, so the smallest decides whether all are above the noise
     r = k if low > 64.0 * _EPS * max(abs(top), abs(low)) else int(np.argmin(
         mu > 64.0 * _EPS * max(abs(top), abs(low))))
-    phi_w = V[:, :r] / np.sqrt(mu[:r])
     shapes_w = np.empty((nd, r))
-    shapes_w[:nx] = phi_w
-    if Lq is not None:
-        shapes_w[nx:] = -lapack.dtrtrs(Lq, Y @ phi_w, lower=1, trans=1)[0]  # nv is small
+    phi_w = shapes_w[:nx]
+    np.divide(V[:, :r], np.sqrt(mu[:r]), out=phi_w)
+    if Lq is not None:  # nv is small
+        np.negative(lapack.dtrtrs(Lq, Y @ phi_w, lower=1, trans=1)[0], out=shapes_w[nx:])
     else:
         shapes_w[nx:] = 0.0
     lam = 1.0 / mu
