@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 import warnings
@@ -75,9 +76,11 @@ def main(argv=None):
     warnings.simplefilter("ignore")
     rounds = args.rounds or (5 if args.quick else 7)
     clock = time.thread_time if args.cpu else time.perf_counter
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"bench_taylor_speed: {blas_threads()}; {rounds} interleaved rounds per ratio; "
-          f"{'thread CPU' if args.cpu else 'wall'} time")
-    out = {"blas": blas_threads(), "rounds": rounds, "clock": "cpu" if args.cpu else "wall"}
+          f"{'thread CPU' if args.cpu else 'wall'} time; load average {load:.2f} at the start")
+    out = {"blas": blas_threads(), "rounds": rounds, "clock": "cpu" if args.cpu else "wall",
+           "load_average_start": load}
 
     if "1" in args.sections:
         section_expansion(out, rounds, clock)
