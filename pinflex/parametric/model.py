@@ -796,18 +796,20 @@ class _PowerGrid:
                 return dot(S, H).T
         else:
             x, y, xy = P[1, 0], P[1, 1], P[1, 2]
-            form = self.form
+            form, tau2 = self.form, np.empty(n)
             block = P.reshape(-1)[5 * n : 8 * n].reshape(3, n)  # xy, x², y²
+            # the powers of x and y only (the third rows above the first stay zero)
+            steps2 = tuple((a[:2], b[:2], out[:2]) for a, b, out in steps)
 
             def run(QT, coef):
                 sub(QT, q0, first)
                 mul(x, y, xy)
-                for a, b, out in steps:
+                for a, b, out in steps2:
                     mul(a, b, out)
                 mm(coef, Y, out=G)
                 mul(Gm, P2, Hm)
                 value = dot(S, H)[:, None] if k == 1 else dot(S, H).T
-                return value, mx(dot(form, block))
+                return value, mx(dot(form, block, out=tau2))
         entry = (run, P)
         if keep:
             kept = self.scratch[checked]
