@@ -282,7 +282,7 @@ def _layout_fields(model, layout, S: np.ndarray, placements, sw: np.ndarray):
     k = sw.shape[1]
     G = layout.F @ (S @ sw)  # [x; per beam: node twists, elastic node twists] per mode
     x = G[:nx]
-    sign = np.where(x.ravel()[np.abs(x).argmax(0) * k + np.arange(k)] < 0, -1.0, 1.0)
+    sign = np.where(x[np.abs(x).argmax(0), np.arange(k)] < 0, -1.0, 1.0)
     G *= sign  # largest elastic component positive
     shapes = np.empty_like(sw)
     shapes[:nx] = x
