@@ -733,7 +733,6 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
     ok = np.ones(n_l, dtype=bool)
     k_diag = ix.eye * k
     fx_all, fz_all = forces[:, :1], forces[:, 1:]
-    tangent = np.empty((n_l, n, n))
     # Rows: the residual K theta - tau, then its two terms K theta and tau (one reduction
     # gives the three norms of the convergence test).
     terms = np.empty((3, n_l, n))
@@ -741,8 +740,10 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
 
     steps = max(1, int(load_steps))
     for step in range(1, steps + 1):
-        frac = step / steps
-        fx, fz = fx_all * frac, fz_all * frac
+        if step == steps:
+            fx, fz = fx_all, fz_all
+        else:
+            fx, fz = fx_all * (step / steps), fz_all * (step / steps)
         active = ok.copy()
         for iteration in range(max_iter + 1):
             q = theta @ prefix
@@ -778,7 +779,7 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
     except np.linalg.LinAlgError:
         ok &= np.linalg.eigvalsh(tangent)[:, 0] > 0.0
     angle = np.arctan2(-forces[:, 1], forces[:, 0])
-    absolute = theta @ prefix
+    absolute = q  # every exit of the Newton loop leaves q = theta @ prefix of the final angles
     low, high = np.minimum(0.0, angle), np.maximum(0.0, angle)
     slack = 1e-9 + 1e-12 * np.abs(absolute).max(axis=1, initial=0.0)
     inside = (absolute >= (low - slack)[:, None]) & (absolute <= (high + slack)[:, None])
