@@ -414,20 +414,21 @@ class FlexibleModel:
         if not self.nv:
             return self.pose_terms(q[None])
         model, data = self.model, self.data
-        qrel = self.coord_map @ q
+        cmap = self.coord_map
+        qrel = np.dot(cmap, q)
         pin.computeJointJacobians(model, data, self._configuration_of(qrel))
         names, cols, A0, A1, A2, plain = self._rodrigues
         jac = {}
-        ids, cmap, local = self.plan.frame_ids, self.coord_map, pin.LOCAL
+        ids, local, dot = self.plan.frame_ids, pin.LOCAL, np.dot
         for link in self.plan.carriers:
-            J = pin.getFrameJacobian(model, data, ids[link], local).reshape(1, 6, -1)
-            jac[link] = J if plain else J @ cmap  # (6,) for one joint: reshaped
+            J = pin.getFrameJacobian(model, data, ids[link], local)
+            jac[link] = (J if plain else dot(J.reshape(6, -1), cmap)).reshape(1, 6, -1)
         rot, slide = {}, {}
-        if names:  # as pose_terms, one pose
-            angle = qrel[cols].reshape(-1, 1, 1)
-            R = A0 + np.sin(angle) * A1 + (1.0 - np.cos(angle)) * A2
-            for i, name in enumerate(names):
-                rot[name] = R[i : i + 1]
+        # a revolute joint's rotation R_o Rot(axis, θ): Pinocchio's parent-to-joint placement
+        # of this pass (pose_terms: the same by Rodrigues' formula, batched)
+        liMi = data.liMi
+        for name, jid in self._revolute_ids:
+            rot[name] = liMi[jid].rotation[None]
         for j in self.plan.joints:
             if j.kind == "prismatic":
                 slide[j.name] = ((j.R_o @ j.axis) * qrel[j.user_col])[None]
@@ -663,6 +664,15 @@ class FlexibleModel:
             if j.kind == "prismatic":
                 slide[j.name] = (j.R_o @ j.axis)[None, :] * qrel[:, j.user_col, None]
         return PoseTerms(jac, rot, slide)
+
+    @property
+    def _revolute_ids(self) -> tuple:
+        """``(name, Pinocchio joint id)`` of the revolute joints, in :attr:`_rodrigues` order."""
+        cached = self.__dict__.get("_revolute_ids_cache")
+        if cached is None:
+            cached = tuple((name, self.model.getJointId(name)) for name in self._rodrigues[0])
+            self.__dict__["_revolute_ids_cache"] = cached
+        return cached
 
     @property
     def _rodrigues(self) -> tuple:
