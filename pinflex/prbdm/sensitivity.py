@@ -53,8 +53,8 @@ class WarmStarts:
     slopes: dict[int, np.ndarray] = field(default_factory=dict)
     base_x: np.ndarray | None = None
     # (loads, base angles, slopes) of the base stacked for one prediction of every load.
-    _stacked: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(default=None,
-                                                                       repr=False)
+    _stacked: tuple[np.ndarray, np.ndarray, np.ndarray] | None = field(
+        default=None, repr=False, compare=False)
 
     def clear(self) -> None:
         """Forget every stored start."""
