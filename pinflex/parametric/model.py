@@ -156,8 +156,9 @@ class TaylorModel:
         Args:
             Q: Joint coordinates of the samples, (nv,) or (n, nv), user convention
                 [rad or m]; joints that are not expanded must stay at ``q0`` (to 1e-12).
-            Y: Design values [kg], (ny,) or (n, ny), over all design variables (only the
-                expanded ones are read); None keeps them at ``y0``.
+            Y: Design values [kg], (ny,) or (n, ny), over all design variables; those that
+                are not expanded must stay at ``y0`` (to 1e-12 relative); None keeps them
+                all at ``y0``.
             warn: Run :meth:`check_radius` on the offsets (warns
                 :class:`TaylorRadiusWarning` beyond the estimated tolerance).
 
@@ -166,8 +167,8 @@ class TaylorModel:
             variables (in their own units, [kg] for point masses).
 
         Raises:
-            ConfigurationError: ``Q`` has the wrong shape, or moves a joint that is not
-                expanded.
+            ConfigurationError: ``Q`` or ``Y`` has the wrong shape, ``Y`` is not finite, or
+                they move a joint or a design variable that is not expanded.
         """
         Q = np.asarray(Q, dtype=float)
         if Q.ndim == 1:
@@ -184,6 +185,8 @@ class TaylorModel:
                     f"joints {fixed} are not expanded in this Taylor model; keep them at q0 "
                     f"({self.q0[fixed].tolist()}) or expand them"
                 )
+        if Y is not None:
+            Y = _checked_design(self, Y, Q.shape[0])
         if not self.design_idx:
             dx = Q[:, jidx] - self.q0[jidx]
         else:
@@ -193,7 +196,6 @@ class TaylorModel:
             if Y is None:
                 dx[:, nj:] = 0.0
             else:
-                Y = np.asarray(Y, dtype=float)
                 didx = list(self.design_idx)
                 dx[:, nj:] = Y[..., didx] - self.y0[didx]
         if warn:
@@ -479,6 +481,36 @@ class TaylorModel:
         dq = self.offsets(Q, None)[:, : len(self.joint_idx)]
         mon = jets.monomials(qspace, dq)
         return mon @ l0, np.einsum("nc,jck->nkj", mon, l1)
+
+
+def _checked_design(tm: TaylorModel, Y, n: int) -> np.ndarray:
+    """Design values ``Y`` as a float array (ny,) or (n, ny), checked against the model.
+
+    Raises:
+        ConfigurationError: not numbers, not finite, a wrong shape, or a design variable that
+            is not expanded moved from ``y0`` (the polynomial does not depend on it: its value
+            there would be the value at ``y0``).
+    """
+    ny = tm.y0.size
+    try:
+        Y = np.asarray(Y, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ConfigurationError(f"design values Y must be numbers, got {Y!r}") from exc
+    if not (Y.shape == (ny,) or (Y.ndim == 2 and Y.shape[1] == ny and Y.shape[0] in (1, n))):
+        raise ConfigurationError(
+            f"expected design values of shape ({ny},) or ({n}, {ny}), got shape {Y.shape}")
+    if not np.all(np.isfinite(Y)):
+        raise ConfigurationError("design values Y must be finite numbers (no NaN or inf)")
+    fixed = [i for i in range(ny) if i not in tm.design_idx]
+    if fixed:
+        moved = np.abs(Y[..., fixed] - tm.y0[fixed]) > 1e-12 * np.maximum(1.0,
+                                                                        np.abs(tm.y0[fixed]))
+        if np.any(moved):
+            bad = sorted({fixed[j] for j in np.nonzero(moved)[-1].tolist()})
+            raise ConfigurationError(
+                f"design variables {bad} are not expanded in this Taylor model; keep them at "
+                f"y0 ({tm.y0[bad].tolist()}) or expand them")
+    return Y
 
 
 def _plain(value):
