@@ -728,14 +728,16 @@ def mass_one(model, layout: OnePoseLayout, terms, twist: dict, y: np.ndarray):
         if e is not None:
             S[r : r + 3, :nx] += lin @ e[0]
         S[r : r + 3, nx:] = to_point @ jac[link][0]
-    if layout.design_diag.size or layout.folded:
-        W = layout.W0.copy()
-        if layout.design_diag.size:
-            W.flat[layout.design_diag] = y[layout.design_cols]
-        for d, r0, r1, B in layout.folded:  # design masses moving with their link's rows
-            W[r0:r1, r0:r1] += y[d] * B
-    else:
-        W = layout.W0
+    W = layout.W0
+    if layout.design_diag.size:
+        W = W.copy()
+        W.flat[layout.design_diag] = y[layout.design_cols]
+    for d, r0, r1, B in layout.folded:  # design masses moving with their link's rows
+        value = float(y[d])
+        if value:  # (a zero mass adds nothing)
+            if W is layout.W0:
+                W = W.copy()
+            W[r0:r1, r0:r1] += value * B
     if layout.keep is not None:
         S = S[layout.keep]  # (rows zero at every pose left out)
     M = S.T @ (W @ S)
