@@ -259,3 +259,27 @@ def test_evaluate_refuses_design_values_the_model_does_not_depend_on():
         with pytest.raises(ConfigurationError):
             tm.evaluate(Q2, bad)
     np.testing.assert_array_equal(tm.evaluate(Q2, [[0.1, 0.1]]), tm.evaluate(Q2, [0.1, 0.1]))
+
+
+def test_a_near_rigid_spring_expands_on_the_nodal_pencil():
+    """A spring 1e12 N·m/rad on the Panda's joint 4 (about 1e6 times its stiffest element).
+
+    The solver-coordinate pencil refuses it (its bordered matrix fails the condition check,
+    reported as a cluster of modes 25 % apart); the nodal pencil resolves it to the digits
+    the stiffness leaves (~1e-6): the expansion agrees with the exact model to that level
+    at the point and at small offsets, and with the locked joint's limit.
+    """
+    from conftest import ROOT
+
+    path = ROOT / "urdf" / "panda_flexible.xml"
+    model = FlexibleModel(path, joints={"panda_joint4": 1e12})
+    joints = ["panda_joint2", "panda_joint4"]
+    tm = expand(model, Q_PANDA, order=3, modes=(1, 2, 3), joints=joints)
+    lam0 = _lam(model, Q_PANDA, None, 3)
+    np.testing.assert_allclose(tm.eigval_jets[0], lam0, rtol=1e-6)
+    locked = FlexibleModel(path, joints={"panda_joint4": "locked"})
+    np.testing.assert_allclose(lam0, _lam(locked, Q_PANDA, None, 3), rtol=3e-6)
+    q = Q_PANDA.copy()
+    q[[1, 3]] += [0.02, -0.03]
+    np.testing.assert_allclose(tm.evaluate(q[None], warn=False)[0], _lam(model, q, None, 3),
+                               rtol=5e-6)

@@ -16,6 +16,7 @@ from pinflex.erls import FlexibleModel
 from pinflex.exceptions import (
     ConfigurationError,
     EigenSolverError,
+    RepeatedEigenvalue,
     TaylorRadiusExceeded,
     TaylorRadiusWarning,
 )
@@ -911,6 +912,50 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
                  n_design)
     idx = [model.n_rigid + m - 1 for m in modes]
     solver = solver_design.covered(model)
+    try:
+        space, lam, w, slopes, jidx, didx = _expansion_jets(model, q0, y0, order, joints,
+                                                            design, idx, solver)
+    except _SolverRefused as refused:
+        # A joint spring much stiffer (or softer) than the beams scales the solver-coordinate
+        # pencil badly: its bordered matrices fail the condition check or its highest modes
+        # the resolution check, where the nodal pencil still resolves them. Such refusals
+        # are taken again on the nodal pencil, which raises its own error if it refuses too.
+        if not model._spring_joints:
+            raise refused.error from None
+        space, lam, w, slopes, jidx, didx = _expansion_jets(model, q0, y0, order, joints,
+                                                            design, idx, False)
+    elastic = slice(model.n_rigid, None)
+    spectrum = w[elastic].copy()
+    # estimated radius (nvars, k) along each variable axis: min of coefficient and spectrum
+    W = spectral_weights(modes, spectrum, slopes)
+    r_c = radius_estimate(space, lam)  # (nvars, k)
+    radius = np.minimum(r_c, 0.5 * meeting_distance(W, np.eye(space.nvars), len(modes)))
+    return TaylorModel(
+        space=space,
+        q0=np.asarray(q0, dtype=float),
+        y0=model.check_y(y0),
+        modes=modes,
+        joint_idx=tuple(jidx),
+        design_idx=tuple(didx),
+        eigval_jets=lam,
+        radius=radius,
+        spectrum=spectrum,
+        spectrum_slopes=slopes,
+        joints=model.joint_labels(),
+    )
+
+
+def _expansion_jets(model, q0, y0, order, joints, design, idx, solver):
+    """One route of :func:`expand`: space, λ jets, eigenvalues at x0, slopes, joints, design.
+
+    ``solver``: the solver-coordinate jets (:func:`reduced_solver_jets`), else the nodal ones
+    (:func:`matrix_jets`).
+
+    Raises:
+        _SolverRefused: On the solver route, its eigenpairs or the eigenpair recursion refused
+            the point (a :class:`~pinflex.exceptions.RepeatedEigenvalue` or an unresolved
+            mode).
+    """
     if solver:  # solver coordinates: only the joints that change the pencil, design terms
         space, rspace, keep, M, K, jidx, didx = reduced_solver_jets(
             model, q0, y0, order=order, joints=joints, design=design)
@@ -930,31 +975,31 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
             "the generalized eigenproblem at the expansion point failed: M(x0) must be "
             "symmetric positive definite"
         ) from exc
+    except (RepeatedEigenvalue, ConfigurationError) as exc:  # (the solver pairs only)
+        if not solver:
+            raise
+        raise _SolverRefused(exc) from exc
     big = np.argmax(np.abs(V), axis=0)
     V = V * np.sign(V[big, np.arange(V.shape[1])])
-    lam, _ = eigen_jets(rspace, M, K, idx, eigvals0=w, eigvecs0=V)
+    try:
+        lam, _ = eigen_jets(rspace, M, K, idx, eigvals0=w, eigvecs0=V)
+    except RepeatedEigenvalue as exc:
+        if solver:
+            raise _SolverRefused(exc) from exc
+        raise
     lam = embed(space, rspace, keep, lam)
     elastic = slice(model.n_rigid, None)
     slopes = np.zeros((space.nvars, model.ndof - model.n_rigid))
     slopes[keep] = spectrum_slopes(rspace, M, K, w[elastic], V[:, elastic])
-    spectrum = w[elastic].copy()
-    # estimated radius (nvars, k) along each variable axis: min of coefficient and spectrum
-    W = spectral_weights(modes, spectrum, slopes)
-    r_c = radius_estimate(space, lam)  # (nvars, k)
-    radius = np.minimum(r_c, 0.5 * meeting_distance(W, np.eye(space.nvars), len(modes)))
-    return TaylorModel(
-        space=space,
-        q0=np.asarray(q0, dtype=float),
-        y0=model.check_y(y0),
-        modes=modes,
-        joint_idx=tuple(jidx),
-        design_idx=tuple(didx),
-        eigval_jets=lam,
-        radius=radius,
-        spectrum=spectrum,
-        spectrum_slopes=slopes,
-        joints=model.joint_labels(),
-    )
+    return space, lam, w, slopes, jidx, didx
+
+
+class _SolverRefused(Exception):
+    """The solver-coordinate pencil refused the expansion point (``error``: its refusal)."""
+
+    def __init__(self, error: Exception):
+        super().__init__(str(error))
+        self.error = error
 
 
 def _expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over):
