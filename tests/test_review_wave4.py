@@ -289,3 +289,30 @@ def test_a_near_rigid_spring_expands_on_the_nodal_pencil():
     q[[1, 3]] += [0.02, -0.03]
     np.testing.assert_allclose(tm.evaluate(q[None], warn=False)[0], _lam(model, q, None, 3),
                                rtol=5e-6)
+
+
+def test_points_tolerance_reports_the_exact_error_of_its_cover():
+    """A wide elbow sweep (0.3 → 2.8 rad) of benchmark A needs two expansion points at 1e-3.
+
+    The segments tile the samples, each centre lies in its segment, and the reported exact
+    error equals each segment's model against the exact frequencies, recomputed here.
+    """
+    from pinflex.assignment.points import points_for_tolerance
+
+    model = FlexibleModel(TWO_LINK, planar=True)
+    t = np.linspace(0.0, 1.0, 60)
+    Q = np.column_stack([1.0 + 0.5 * t, 1.3 + 3.0 * t])  # absolute angles
+    exact = model.frequencies(Q, model.y0, n_modes=1)[:, 0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TaylorRadiusWarning)  # the cover meets the tolerance
+        pw = points_for_tolerance(model, Q, model.y0, tol=1e-3, modes=(1,))
+    assert len(pw.centres) == 2
+    assert pw.segments[0][0] == 0 and pw.segments[-1][1] == Q.shape[0]
+    assert all(a[1] == b[0] for a, b in zip(pw.segments, pw.segments[1:]))
+    assert all(a <= c < b for c, (a, b) in zip(pw.centres, pw.segments))
+    err = max(float(np.max(np.abs(tm.evaluate(Q[a:b], quantity="freq_hz", warn=False)[:, 0]
+                                  / exact[a:b] - 1)))
+              for tm, (a, b) in zip(pw.models, pw.segments))
+    assert err < 1e-3
+    assert abs(pw.points_choice["exact_error"] / err - 1) < 1e-9
+    assert pw.points_choice["estimate"] < 1e-3
