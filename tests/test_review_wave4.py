@@ -316,3 +316,37 @@ def test_points_tolerance_reports_the_exact_error_of_its_cover():
     assert err < 1e-3
     assert abs(pw.points_choice["exact_error"] / err - 1) < 1e-9
     assert pw.points_choice["estimate"] < 1e-3
+
+
+def test_points_tolerance_judges_its_cover_against_the_tracked_modes():
+    """Across an exact crossing, one point's polynomial follows its own branch.
+
+    The edge-bar arm of ``crossing_arm`` along its elbow sweep: sorted modes 2 and 3 exchange
+    near 0.15 rad. At tol 1e-4 for mode 3 one expansion point past the crossing covers the
+    sweep; its exact error is that against the mode family it follows (the independent global
+    FE, families told apart by where the motion lives), not against sorted mode 3 (which jumps
+    to the other family before the crossing: 5.8 %).
+    """
+    import crossing_arm as arm_ref
+
+    from pinflex.assignment.points import points_for_tolerance
+
+    model = FlexibleModel(parse(arm_ref.urdf()))
+    el = np.linspace(0.0, 0.6, 31)
+    Q = np.column_stack([np.full_like(el, 0.3), el])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TaylorRadiusWarning)
+        pw = points_for_tolerance(model, Q, model.y0, tol=1e-4, modes=(3,))
+    assert len(pw.models) == 1
+    fams = [arm_ref.reference_families(q, 0.125, 0.125) for q in Q]
+    inp = np.array([f[0][0] for f in fams])  # first in-plane mode
+    out = np.array([f[1][1] for f in fams])  # second out-of-plane mode
+    c = pw.centres[0]
+    f_c = model.frequencies(Q[c], n_modes=3)[2]
+    family = inp if abs(f_c / inp[c] - 1) < abs(f_c / out[c] - 1) else out
+    v = pw.models[0].evaluate(Q, quantity="freq_hz", warn=False)[:, 0]
+    err = float(np.max(np.abs(v / family - 1)))
+    assert err < 1e-4
+    assert abs(pw.points_choice["exact_error"] / err - 1) < 1e-6
+    sorted3 = model.frequencies(Q, n_modes=3)[:, 2]
+    assert np.max(np.abs(v / sorted3 - 1)) > 1e-2  # the sorted numbers change branch
