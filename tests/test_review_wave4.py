@@ -350,3 +350,36 @@ def test_points_tolerance_judges_its_cover_against_the_tracked_modes():
     assert abs(pw.points_choice["exact_error"] / err - 1) < 1e-6
     sorted3 = model.frequencies(Q, n_modes=3)[:, 2]
     assert np.max(np.abs(v / sorted3 - 1)) > 1e-2  # the sorted numbers change branch
+
+
+@pytest.mark.parametrize("condition", ["4e4", "locked"])
+def test_prismatic_joint_between_beams_on_the_solver_route(condition):
+    """The three-joint arm with its middle joint prismatic (axis oblique to the beams).
+
+    A spring or a lock on it, the tip mass as design variable at 1.2 × nominal: order 3 in
+    the last two joints and the mass, error against the exact model falls like h⁴; free, the
+    solver-coordinate tracking along a three-joint motion equals the nodal one.
+    """
+    text = THREE.replace('<joint name="q2" type="revolute">', '<joint name="q2" type="prismatic">')
+    text = text.replace('<axis xyz="0 1 0"/>\n    <limit lower="-7"',
+                        '<axis xyz="0 0.6 0.8"/>\n    <limit lower="-7"', 1)
+    free = FlexibleModel(parse(text))
+    q0 = np.array([0.2, 0.1, -0.9])
+    Q = q0 + np.linspace(0.0, 1.0, 30)[:, None] * np.array([1.5, 0.4, 2.5])
+    a = track_modes(free, Q, modes=(1, 2, 3, 4), coordinates="solver")
+    b = track_modes(free, Q, modes=(1, 2, 3, 4), coordinates="nodal")
+    np.testing.assert_array_equal(a.permutation, b.permutation)
+    np.testing.assert_allclose(a.mac_step, b.mac_step, atol=1e-9)
+    joint = (f'<pinflex:joint name="q2" stiffness="{condition}"/>' if condition != "locked"
+             else '<pinflex:joint name="q2" locked="true"/>')
+    model = FlexibleModel(parse(text.replace("</robot>", joint + "</robot>")),
+                          joints="annotated")
+    y = model.y0 * 1.2
+    tm = expand(model, q0, y, order=3, modes=(1, 2, 3), joints=["q2", "q3"])
+    errs = []
+    for h in (0.1, 0.05):
+        q, yy = q0 + h * np.array([0.0, 0.2, -0.3]), y + h * 0.05
+        errs.append(np.max(np.abs(tm.evaluate(q[None], yy, warn=False)[0]
+                                  / _lam(model, q, yy, 3) - 1)))
+    assert errs[0] < 1e-4
+    assert 12 < errs[0] / errs[1] < 22, errs  # 2⁴ = 16
