@@ -193,14 +193,24 @@ def test_one_pose_frequencies_equal_the_batched_solve(models):
 
 
 def test_one_pose_root_twists_equal_the_batched_ones(models):
-    """The one-pose root-twist recursion equals the batched one link by link (round-off)."""
+    """The one-pose root-twist recursion equals the batched one link by link (round-off).
+
+    It covers every link the one-pose solve reads (beams, rigid inertias, point masses) and
+    their ancestors, and skips the others (benchmark A's tool frame).
+    """
     for name, model, q in models:
         terms = model.pose_terms_one(model.check_q(q))
         plan = solve.solve_plan(model)
         ref = solve.root_twists(model, plan, terms, 1)
         got = solve.root_twists_one(model, plan, terms)
-        assert list(got) == list(ref), name
+        read = set(plan.cores) | set(model.plan.inertias) | {
+            pm.link for pm in model.plan.point_masses}
+        assert read <= set(got) <= set(ref), name
+        if name.startswith("benchmark A"):
+            assert set(ref) - set(got) == {"tool"}
         for link, e in ref.items():
+            if link not in got:
+                continue
             if e is None:
                 assert got[link] is None, (name, link)
             else:

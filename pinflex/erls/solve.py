@@ -237,13 +237,21 @@ def _twist_at(att: _Attach, root, alg, nx: int):
 def _one_pose_joints(model, plan: SolvePlan) -> tuple:
     """Per joint, the constants :func:`root_twists_one` uses (cached per model, read-only).
 
-    ``(const, P)``: the attachment's constant part placed on all ``nx`` columns (6, nx) or
-    None, and the joint's projection as its two diagonal 3 × 3 blocks (2, 3, 3), times
-    ``R_oᵀ`` for joints whose rotation is constant.
+    ``(const, P, needed)``: the attachment's constant part placed on all ``nx`` columns
+    (6, nx) or None, the joint's projection as its two diagonal 3 × 3 blocks (2, 3, 3), times
+    ``R_oᵀ`` for joints whose rotation is constant, and whether the one-pose solve reads the
+    child's twist (or a descendant's).
     """
     cached = model.__dict__.get("_one_pose_joints")
     if cached is not None:
         return cached
+    # the links whose root twist the one-pose solve reads (beams, rigid inertias, point
+    # masses) and their ancestors; joints to other links (a tool frame) are skipped
+    needed = set(plan.cores) | set(model.plan.inertias) | {
+        pm.link for pm in model.plan.point_masses}
+    for j in reversed(model.plan.joints):  # children after their parents: walk back up
+        if j.child in needed:
+            needed.add(j.parent)
     out = []
     for j, att in zip(model.plan.joints, plan.joint_attach):
         const = None
@@ -255,18 +263,24 @@ def _one_pose_joints(model, plan: SolvePlan) -> tuple:
         if j.kind != "revolute":
             P = P @ j.R_o.T
         P.setflags(write=False)
-        out.append((const, P))
+        out.append((const, P, j.child in needed))
     cached = tuple(out)
     model.__dict__["_one_pose_joints"] = cached
     return cached
 
 
 def root_twists_one(model, plan: SolvePlan, terms) -> dict:
-    """:func:`root_twists` of one pose (b = 1), without the algebra indirection."""
+    """:func:`root_twists` of one pose (b = 1), without the algebra indirection.
+
+    Only for the links the one-pose solve reads (beams, rigid inertias, point masses) and
+    their ancestors: other links (a tool frame behind the last mass) get no entry.
+    """
     nx = plan.nx
     twist: dict = {model.plan.root: None}
-    for j, att, (const, P) in zip(model.plan.joints, plan.joint_attach,
-                                  _one_pose_joints(model, plan)):
+    for j, att, (const, P, needed) in zip(model.plan.joints, plan.joint_attach,
+                                          _one_pose_joints(model, plan)):
+        if not needed:
+            continue
         e = twist[j.parent]
         if e is None:
             if const is None:
