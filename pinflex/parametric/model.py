@@ -293,6 +293,7 @@ class TaylorModel:
             strict: Raise instead of warning :class:`TaylorRadiusWarning`.
 
         Raises:
+            ConfigurationError: Some offset is not finite.
             TaylorRadiusExceeded: ``strict`` and some sample is beyond the estimated radius or
                 its estimated relative error exceeds ``tol``.
 
@@ -300,6 +301,9 @@ class TaylorModel:
             The largest estimated relative error over samples and modes (``inf`` beyond the
             estimated radius).
         """
+        if not np.all(np.isfinite(dx)):
+            raise ConfigurationError("offsets that are not finite: the Taylor model has no "
+                                     "value there")
         est, ratio = self.error_estimate(dx, quantity=quantity, mon=mon)
         return self._report(est, ratio, tol, strict)
 
@@ -331,9 +335,19 @@ class TaylorModel:
             quantity: 'eigval' or 'freq_hz'.
             linear_in_design: Use the partially linear polynomial λ̂ (eq. 7) instead of λ^p.
             warn: Warn where the estimated truncation error exceeds ``tol``
-                (:meth:`check_radius`).
+                (:meth:`check_radius`); joint values that are not finite are then refused.
+                With ``warn=False`` and ``strict=False`` nothing is checked: a NaN or an
+                infinite joint value gives a NaN or infinite value.
             strict: Raise :class:`~pinflex.exceptions.TaylorRadiusExceeded` there instead.
             tol: Relative error level of the check.
+
+        Returns:
+            Values (n, k) of the expanded modes.
+
+        Raises:
+            ConfigurationError: ``Q`` or ``Y`` has the wrong shape, moves a joint or design
+                variable the model does not expand, or (with the check on) is not finite.
+            TaylorRadiusExceeded: ``strict`` and some sample's estimated error exceeds ``tol``.
         """
         plan = self.evaluation_plan
         grid = plan.grid
@@ -429,6 +443,11 @@ class TaylorModel:
         """The per-sample estimate and report (:meth:`error_estimate`) and the value."""
         if dx is None:
             dx = self.offsets(Q, Y, warn=False)
+        if not np.all(np.isfinite(dx)):  # the screens send every non-finite sample here
+            bad = int(np.flatnonzero(~np.all(np.isfinite(dx), axis=1))[0])
+            raise ConfigurationError(
+                f"joint values of sample {bad} are not finite ({np.asarray(Q)[bad].tolist()}): "
+                "the Taylor model has no value there")
         if mon is None:
             mon = monomial_rows(self.space, dx.T).T
         quantity, linear = key
