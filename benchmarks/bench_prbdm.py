@@ -2,6 +2,9 @@
 
 Run ``python benchmarks/bench_prbdm.py`` (all sections) or pick sections with
 ``--sections truth table chart speed condition fitspeed paper classic pareto scf equal``.
+``--sections fitspeed --links 3 4 5`` times whole beams of the random-beam study (one fit per
+link count, as ``pinflex batch prbdm --links 3 4 5`` runs them) with the ratio of each link
+count beside the ratio per beam.
 ``--quick`` runs small versions (fewer starts, rounds and models); ``--json FILE`` writes the
 numbers of the new sections as one JSON object. Charts go to ``--outdir`` (default: the
 working directory). Speed ratios are measured interleaved in one process (CPU time, one BLAS
@@ -286,6 +289,106 @@ def section_fitspeed(quick: bool, n_joints: int | None = None, rounds: int | Non
                            "ratio_min": float(ratios.min()), "ratio_max": float(ratios.max()),
                            "loss_gap_rel": float(gap), "load_before": load_before,
                            "load_after": _load()}
+
+
+#: The random-beam study of docs/prbdm.md:
+#: ``pinflex batch prbdm --beams 1000 --seed 15 --links 3 4 5 --starts 8``.
+STUDY_SEED, STUDY_LINKS, STUDY_STARTS = 15, (3, 4, 5), 8
+
+
+def section_fitspeed_study(quick: bool, links: tuple[int, ...] = STUDY_LINKS,
+                           rounds: int | None = None, items: list | None = None) -> None:
+    """Per-beam fit cost in the study setting, exact path against finite differences.
+
+    A beam of the study costs one fit per link count (``pinflex batch prbdm --links 3 4 5``:
+    beam ``i`` of study seed 15, combined objective, 8 starts, the beam's own seed for the
+    start points, the study's truth settings). Each round fits every beam at every link count
+    with both paths, alternating which goes first, timed by this thread's CPU time (one BLAS
+    thread). Per beam: the ratio of the summed fit times (finite differences / exact) of each
+    round, median and range over rounds; beside it, the ratio of each link count.
+    """
+    from pinflex.batch.tasks import PrbdmStudy, beam_seed
+    from pinflex.prbdm.beams import Material
+
+    items = items if items is not None else ([0] if quick else [0, 1, 2])
+    rounds = rounds or (2 if quick else 5)
+    study = PrbdmStudy(seed=STUDY_SEED, n_beams=max(items) + 1, links=tuple(links),
+                       n_starts=STUDY_STARTS)
+    beam_cfg, truth_cfg = study.beam_settings(), study.truth_settings()
+    material = Material(beam_cfg["material"]["youngs_modulus_pa"],
+                        beam_cfg["material"]["density_kg_m3"], beam_cfg["material"]["name"])
+    beams, truths, seeds = {}, {}, {}
+    for i in items:
+        seeds[i] = beam_seed(STUDY_SEED, i)
+        beams[i] = random_beam(seeds[i], n_sections=beam_cfg["n_sections"],
+                               length_m=beam_cfg["length_m"],
+                               max_half_width_m=beam_cfg["max_half_width_m"],
+                               thickness_m=beam_cfg["thickness_m"], material=material)
+        truths[i] = compute_truth(beams[i], truth_cfg["n_modes"], tuple(truth_cfg["alphas"]))
+    kinds = ("analytic", "finite-difference")
+    cpu: dict = {(k, i, n): [] for k in kinds for i in items for n in links}
+    evals: dict = {(k, i, n): [] for k in kinds for i in items for n in links}
+    losses: dict = {(k, i, n): [] for k in kinds for i in items for n in links}
+    load_before = _load()
+    for r in range(rounds):
+        for i in items:
+            for n in links:
+                for jac in (kinds if (r + n) % 2 == 0 else kinds[::-1]):
+                    fit_cfg = next(c["fit"] for c in study.configs() if c["fit"]["n_joints"] == n)
+                    t0 = time.thread_time()
+                    fit = fit_prbdm(beams[i], n, fit_cfg["n_modes"],
+                                    objective=fit_cfg["objective"],
+                                    stiffness_law=fit_cfg["stiffness_law"],
+                                    poses=fit_cfg["poses"], n_starts=fit_cfg["n_starts"],
+                                    seed=seeds[i], truth=truths[i], jacobian=jac)
+                    cpu[jac, i, n].append(time.thread_time() - t0)
+                    evals[jac, i, n].append(fit.n_evaluations)
+                    losses[jac, i, n].append(fit.combined_error)
+    names = "+".join(f"{n}R" for n in links)
+    print(f"== fit speed per beam, study setting (seed {STUDY_SEED}, {names}, combined, "
+          f"{STUDY_STARTS} starts): beams {items}, {rounds} rounds interleaved, thread CPU "
+          f"seconds, one BLAS thread ({load_before} before, {_load()} after)")
+    per_beam = {}
+    beam_ratios = []
+    for i in items:
+        a = np.sum([cpu["analytic", i, n] for n in links], axis=0)
+        f = np.sum([cpu["finite-difference", i, n] for n in links], axis=0)
+        ratio = f / a
+        beam_ratios.extend(ratio.tolist())
+        per_n = {}
+        parts = []
+        for n in links:
+            rn = np.array(cpu["finite-difference", i, n]) / np.array(cpu["analytic", i, n])
+            la, lf = losses["analytic", i, n][0], losses["finite-difference", i, n][0]
+            per_n[n] = {"analytic_cpu_s": cpu["analytic", i, n],
+                        "fd_cpu_s": cpu["finite-difference", i, n],
+                        "ratio_median": float(np.median(rn)), "ratio_min": float(rn.min()),
+                        "ratio_max": float(rn.max()),
+                        "analytic_evaluations": int(np.median(evals["analytic", i, n])),
+                        "fd_evaluations": int(np.median(evals["finite-difference", i, n])),
+                        "analytic_loss": la, "fd_loss": lf}
+            parts.append(f"{n}R {np.median(rn):.1f}x ({rn.min():.1f}-{rn.max():.1f}; "
+                         f"{np.median(cpu['analytic', i, n]):.2f} / "
+                         f"{np.median(cpu['finite-difference', i, n]):.2f} s; loss "
+                         f"{la:.4e} / {lf:.4e})")
+        per_beam[i] = {"beam_seed": seeds[i], "analytic_cpu_s": a.tolist(),
+                       "fd_cpu_s": f.tolist(), "ratio_median": float(np.median(ratio)),
+                       "ratio_min": float(ratio.min()), "ratio_max": float(ratio.max()),
+                       "per_n": per_n}
+        print(f"   beam {i}: exact {np.median(a):.2f} s, finite differences {np.median(f):.2f} s "
+              f"per beam; ratio per beam median {np.median(ratio):.1f}x  range "
+              f"{ratio.min():.1f}-{ratio.max():.1f}x")
+        for part in parts:
+            print(f"           {part}")
+    br = np.array(beam_ratios)
+    print(f"   ratio per beam over all beams and rounds median {np.median(br):.1f}x  range "
+          f"{br.min():.1f}-{br.max():.1f}x (target >= 10x per beam)")
+    RESULTS["fitspeed_study"] = {"study_seed": STUDY_SEED, "links": list(links),
+                                 "starts": STUDY_STARTS, "beams": items, "rounds": rounds,
+                                 "clock": "time.thread_time", "per_beam": per_beam,
+                                 "ratio_median": float(np.median(br)),
+                                 "ratio_min": float(br.min()), "ratio_max": float(br.max()),
+                                 "load_before": load_before, "load_after": _load()}
 
 
 def section_paper(seed: int, starts: int, quick: bool) -> None:
@@ -606,8 +709,11 @@ def main() -> None:
     parser.add_argument("--out", default="prbdm_speed_accuracy.png")
     parser.add_argument("--outdir", default=".")
     parser.add_argument("--quick", action="store_true", help="small versions of the sections")
-    parser.add_argument("--links", type=int, default=None,
-                        help="joints of the fitspeed section (default 4; 3 with --quick)")
+    parser.add_argument("--links", type=int, nargs="+", default=None,
+                        help="joints of the fitspeed section (default 4; 3 with --quick); "
+                             "several (e.g. 3 4 5) time a whole beam of the study setting")
+    parser.add_argument("--beams", type=int, nargs="+", default=None,
+                        help="study beams of the per-beam fitspeed run (default 0 1 2)")
     parser.add_argument("--rounds", type=int, default=None,
                         help="interleaved rounds of the fitspeed section (default 5; 3 quick)")
     parser.add_argument("--store", default=None,
@@ -632,7 +738,11 @@ def main() -> None:
         elif name == "condition":
             section_condition()
         elif name == "fitspeed":
-            section_fitspeed(args.quick, args.links, args.rounds)
+            if args.links is not None and len(args.links) > 1:
+                section_fitspeed_study(args.quick, tuple(args.links), args.rounds, args.beams)
+            else:
+                section_fitspeed(args.quick, args.links[0] if args.links else None,
+                                 args.rounds)
         elif name == "paper":
             section_paper(args.seed, args.starts, args.quick)
         elif name == "classic":

@@ -211,8 +211,9 @@ class Objective:
             if jacobian == "analytic" else None
         self.n_eig = problem.poses.shape[0] * problem.n_modes
         self.n_evaluations = 0
-        self._cache: tuple[np.ndarray, np.ndarray, Callable[[], np.ndarray]] | None = None
+        self._cache: tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray]] | None = None
         self._jac: tuple[tuple, np.ndarray] | None = None
+        self._jac_buffer: np.ndarray | None = None
 
     def _weighted(self, res: np.ndarray, x: np.ndarray) -> np.ndarray:
         n1 = self.problem.n_joints + 1
@@ -226,7 +227,7 @@ class Objective:
         out[rows] = x[:n1].sum() - 1.0
         return out
 
-    def _compute(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, Callable[[], np.ndarray]]:
+    def _compute(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray]]:
         if self._cache is not None and np.array_equal(self._cache[0], x):
             return self._cache
         self.n_evaluations += 1
@@ -250,16 +251,20 @@ class Objective:
         cached = self._compute(x)
         if self._jac is not None and self._jac[0] is cached:
             return self._jac[1]
-        jac = cached[2]()
-        n1 = self.problem.n_joints + 1
         n_eig = self.n_eig
-        rows = jac.shape[0] if self.w_defl > 0.0 else n_eig
-        full = np.zeros((rows + 1, x.size))
-        full[:n_eig] = jac[:n_eig] if self.w_eig == 1.0 else np.sqrt(self.w_eig) * jac[:n_eig]
-        if self.w_defl > 0.0:
-            full[n_eig:rows] = jac[n_eig:] if self.w_defl == 1.0 \
-                else np.sqrt(self.w_defl) * jac[n_eig:]
-        full[rows, :n1] = 1.0
+        rows = cached[1].size - 1
+        full = self._jac_buffer
+        if full is None or full.shape != (rows + 1, x.size):
+            # One buffer per search: scipy copies the Jacobian it is given, and the last row
+            # (the derivative of the simplex residual) never changes.
+            full = np.zeros((rows + 1, x.size))
+            full[rows, :self.problem.n_joints + 1] = 1.0
+            self._jac_buffer = full
+        cached[2](full[:rows])
+        if self.w_eig != 1.0:
+            full[:n_eig] *= np.sqrt(self.w_eig)
+        if self.w_defl > 0.0 and self.w_defl != 1.0:
+            full[n_eig:rows] *= np.sqrt(self.w_defl)
         self._jac = (cached, full)
         return full
 

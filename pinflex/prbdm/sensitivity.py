@@ -439,13 +439,16 @@ def evaluate_with_jacobian(problem: MappingProblem, x: np.ndarray, workspace: Ch
 
 def residuals_and_jacobian(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
                            warm: WarmStarts | None = None, deflection: bool = True,
-                           load_steps: int = 4) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
+                           load_steps: int = 4) -> tuple[np.ndarray, Callable[..., np.ndarray]]:
     """The residuals of :func:`evaluate_with_jacobian` and a function giving their Jacobian.
 
     The inner loop of a fit: the closed-form mass matrix, no Pinocchio update, no loss
     summaries (the same numbers to round-off as :func:`evaluate_with_jacobian`). The
     Jacobian is formed only when the returned function is called (a trust-region solver
-    needs it at accepted steps only), from the state of this evaluation.
+    needs it at accepted steps only), from the state of this evaluation. Called with
+    ``out`` (rows: the frequency residuals, optionally followed by the deflection ones), it
+    writes the Jacobian's first ``len(out)`` rows there and returns ``out``; with as many rows
+    as there are frequency residuals, the deflection rows are not formed.
     """
     out = _evaluate(problem, x, workspace, warm, deflection, load_steps, None, False,
                     summary=False)
@@ -456,7 +459,7 @@ def residuals_and_jacobian(problem: MappingProblem, x: np.ndarray, workspace: Ch
 def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
               warm: WarmStarts | None, deflection: bool, load_steps: int,
               want_jacobian: bool | None, pinocchio: bool, summary: bool
-              ) -> JacobianEvaluation | tuple[np.ndarray, Callable[[], np.ndarray]]:
+              ) -> JacobianEvaluation | tuple[np.ndarray, Callable[..., np.ndarray]]:
     """Residuals, and the losses when ``summary``.
 
     The Jacobian is formed now (``want_jacobian`` True), never (False) or on demand (None: a
@@ -553,7 +556,7 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
     norm_l = np.sqrt(max(n_loads, 1))
     residuals = np.concatenate([eig_res, defl_res.ravel() / norm_l])
 
-    def jacobian() -> np.ndarray:
+    def jacobian(out: np.ndarray | None = None) -> np.ndarray:
         # ds/dx: s_j = L sum_{i<j} gamma_i; gamma = raw / sum(raw).
         dgamma = (ix.eye1 - gamma[:, None]) / total
         ds_dx = length * (ix.cum_gamma @ dgamma)
@@ -582,16 +585,22 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
             dfreq[np.arange(m_poses), :, n1 + np.arange(m_poses)] = \
                 (phi2 * k_pose[:, :, None]).sum(1)
         dfreq /= 8.0 * np.pi**2 * model_hz[:, :, None]
-        jac_eig = (dfreq / eig_scale[None, :, None]).reshape(-1, n_p)
-        jac_defl = np.zeros((n_loads, 2, n_p))
+        n_eig = m_poses * nm
+        full = np.empty((residuals.size, n_p)) if out is None else out
+        np.divide(dfreq, eig_scale[None, :, None], out=full[:n_eig].reshape(m_poses, nm, n_p))
+        if full.shape[0] == n_eig:
+            return full
+        jac_defl = full[n_eig:].reshape(n_loads, 2, n_p)
+        jac_defl[...] = 0.0
         if solved and ok.any():
             dtip, dtheta = _tip_derivative(k_static, theta[ok], forces[ok], lengths, k_ref,
                                            dk_ref, factors, ds_dx, law_segment, n1)
             jac_defl[ok] = dtip / scale[ok, None, None]
+            jac_defl /= norm_l
             if warm is not None:
                 warm.set_base(x, {int(k): theta[k] for k in np.flatnonzero(ok)},
                               {int(k): dtheta[row] for row, k in enumerate(np.flatnonzero(ok))})
-        return np.vstack([jac_eig, jac_defl.reshape(-1, n_p) / norm_l])
+        return full
 
     if not summary:
         assert want_jacobian is None
