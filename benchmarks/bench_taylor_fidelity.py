@@ -4,8 +4,10 @@ Same work for every setting, in one run: modes 1-3 of benchmark A along its 152-
 trajectory (nominal design, joints expanded), and of the flexible UR5 at 40 samples within
 ±0.1 rad of a general pose (three joints). Error: the largest relative frequency error over
 samples and modes against the exact model at the same samples (the value the series
-converges to). Estimate: the next-order estimate ``max |T_(p+1) - T_p| / |T_(p+1)|`` that
-``expand(tol=...)`` / ``pinflex assign --tol`` use to pick the order. Time: one evaluation of
+converges to). Estimate: the two-term estimate ``max(e_p, e_(p+1))``, ``e_p = |T_(p+1) - T_p|
+/ |T_(p+1)|`` (the larger of the next two orders' relative terms), that ``expand(tol=...)`` /
+``pinflex assign --tol`` use to pick the order; the single next-order term ``e_p`` beside it
+(it vanishes where a coefficient does). Time: one evaluation of
 every sample (monomials rebuilt, radius check off; this thread's CPU time, median of
 interleaved rounds, single-thread BLAS, so a loaded machine inflates it less than wall time),
 and the expansion time (wall).
@@ -38,7 +40,7 @@ import numpy as np  # noqa: E402
 from pinflex.assignment.benchmark_a import Q0, benchmark_model, benchmark_trajectory  # noqa: E402
 from pinflex.erls import FlexibleModel  # noqa: E402
 from pinflex.parametric import expand  # noqa: E402
-from pinflex.parametric.fidelity import next_order_estimates  # noqa: E402
+from pinflex.parametric.fidelity import next_order_estimates, two_term_estimates  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 MODES = (1, 2, 3)
@@ -60,10 +62,11 @@ def _exact(model, Q):
 
 
 def order_study(model, q0, Q, joints, orders, rounds):
-    """Rows (order, error, estimate, eval time, expansion time) at one expansion point."""
+    """Rows (order, error, estimate, single term, eval time, expansion time) at one point."""
     exact = _exact(model, Q)
-    top = expand(model, q0, order=max(orders) + 1, modes=MODES, joints=joints, design=[])
-    est = next_order_estimates(top, Q)
+    top = expand(model, q0, order=max(orders) + 2, modes=MODES, joints=joints, design=[])
+    est = two_term_estimates(top, Q)
+    single = next_order_estimates(top, Q)
     rows = []
     for p in orders:
         t0 = time.perf_counter()
@@ -72,7 +75,8 @@ def order_study(model, q0, Q, joints, orders, rounds):
         err = float(np.max(np.abs(tm.evaluate(Q, quantity="freq_hz", warn=False) / exact - 1)))
         t = interleaved({"e": lambda: tm.evaluate(Q, quantity="freq_hz", warn=False)},
                         rounds=rounds, number=200, clock=time.thread_time)["e"]
-        rows.append((p, err, float(np.max(est[p])), float(np.median(t)), t_exp))
+        rows.append((p, err, float(np.max(est[p])), float(np.max(single[p])),
+                     float(np.median(t)), t_exp))
     return rows
 
 
@@ -116,12 +120,16 @@ def main(argv=None):
         if name == "flexible UR5":
             orders = (1, 2, 3, 4) if args.quick else (1, 2, 3, 4, 5)
         rows = order_study(model, q0, Q, joints, orders, rounds)
-        print(f"\n1. {name}, {Q.shape[0]} samples, modes 1-3: order | max error | next-order "
-              "estimate | evaluation [us] | expansion [ms]")
-        for p, e, est, t, te in rows:
-            print(f"  p={p:<2d} {e:11.2e} {est:11.2e} {1e6 * t:10.1f} {1e3 * te:10.1f}")
-        out["order"][name] = [dict(zip(("order", "error", "estimate", "eval_s", "expand_s"), r))
-                              for r in rows]
+        print(f"\n1. {name}, {Q.shape[0]} samples, modes 1-3: order | max error | two-term "
+              "estimate | estimate / error | single next-order term | evaluation [us] | "
+              "expansion [ms]")
+        for p, e, est, one, t, te in rows:
+            print(f"  p={p:<2d} {e:11.2e} {est:11.2e} {est / e:8.2f} {one:11.2e} "
+                  f"{1e6 * t:10.1f} {1e3 * te:10.1f}")
+        ratios = [r[2] / r[1] for r in rows]
+        print(f"  two-term estimate / error: {min(ratios):.2f}-{max(ratios):.2f}")
+        out["order"][name] = [dict(zip(("order", "error", "estimate", "single_term", "eval_s",
+                                        "expand_s"), r)) for r in rows]
     model, _, Q, _ = cases["benchmark A"]
     counts = (1, 2, 4, 8) if args.quick else (1, 2, 3, 4, 6, 8)
     for order in (2, 4):

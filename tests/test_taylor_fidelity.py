@@ -112,6 +112,7 @@ def test_cli_assign_tol_reports_order_and_estimate(tmp_path):
     choice = data["taylor_order_choice"]
     assert data["taylor_order"] == choice["order"]
     assert choice["estimate"] <= 1e-3 < choice["estimates"][str(choice["order"] - 1)]
+    assert choice["method"].startswith("two-term estimate max(")
 
 
 def test_expansion_points_by_estimate_cover_benchmark_a_and_flag_a_miss(arm):
@@ -137,3 +138,38 @@ def test_expansion_points_by_estimate_cover_benchmark_a_and_flag_a_miss(arm):
     assert miss.estimate <= 1e-4 < miss.max_error
     with pytest.raises(ConfigurationError, match="criterion"):
         expand_along(arm, Q, y, criterion="guess")
+
+
+def test_order_by_tolerance_is_not_fooled_by_a_vanishing_next_order():
+    """Benchmark A stretched (elbow 0): the frequency is even in the elbow offset.
+
+    Reference: the independent planar FE of ``reference_fe`` (no pinflex code) at the same
+    samples, elbow offsets within ±0.4 rad; it is symmetric in the offset, so every odd Taylor
+    coefficient vanishes and the single next-order term of order 2 is ~1e-19 while order 2 is
+    off by 5.4e-3. The two-term estimate picks an order that meets tol (1e-3) by the
+    reference, with its estimate within 1.5x of the reference error.
+    """
+    from reference_fe import planar_two_link_frequencies
+
+    arm = benchmark_model()
+    y0 = arm.check_y(None)
+    q0 = np.array([0.7, 0.7])
+    Q = q0 + np.c_[np.zeros(9), np.linspace(-0.4, 0.4, 9)]
+    ref = np.array([planar_two_link_frequencies(q, *y0)[1][0] for q in Q])
+    np.testing.assert_allclose(ref, ref[::-1], rtol=1e-10)  # even in the elbow offset
+
+    def ref_error(tm):
+        return float(np.max(np.abs(tm.evaluate(Q, quantity="freq_hz", warn=False)[:, 0]
+                                   / ref - 1)))
+
+    single = next_order_estimates(expand(arm, q0, order=3, design=[]), Q)
+    assert np.max(single[2]) < 1e-12 < 1e-3 < ref_error(expand(arm, q0, order=2, design=[]))
+    choice = order_for_tolerance(arm, q0, Q=Q, tol=1e-3, design=[])
+    actual = ref_error(choice.model)
+    assert choice.estimate <= 1e-3 and actual <= 1e-3
+    assert 1 / 1.5 < choice.estimate / actual < 1.5
+    lower = expand(arm, q0, order=choice.order - 1, design=[])
+    assert ref_error(lower) > 1e-3
+    assert choice.estimates[choice.order - 1] > 1e-3
+    tm = expand(arm, q0, order=8, design=[], tol=1e-3, over=Q)
+    assert tm.order == choice.order and "two" in tm.order_choice["method"]

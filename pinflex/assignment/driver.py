@@ -217,12 +217,13 @@ def build_assignment(
             :func:`pinflex.assignment.problem.build_assignment_qp`).
         taylor: Reuse this Taylor model instead of expanding.
         taylor_tol: Pick the Taylor order (1–8, ``order`` is then ignored): the lowest whose
-            next-order estimate of the relative error of ``quantity`` meets it along the
-            trajectory at ``y0`` and at the corners of the design box
+            two-term estimate (the larger of the next two orders' terms) of the relative
+            error of ``quantity`` meets it along the trajectory at ``y0`` and at the corners
+            of the design box
             (:func:`pinflex.parametric.fidelity.order_for_tolerance`); the model's
             ``order_choice`` reports it.
         points_tol: Cover the trajectory with the fewest Taylor expansion points (then the
-            lowest order) whose next-order estimate meets it at every sample at ``y0``
+            lowest order) whose two-term estimate meets it at every sample at ``y0``
             (:func:`pinflex.assignment.points.points_for_tolerance`); each sample's QP rows
             come from its segment's model, ``q0`` and ``order`` are then ignored and the
             model's ``points_choice`` reports the choice.

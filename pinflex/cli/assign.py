@@ -27,8 +27,9 @@ def add_parser(sub) -> None:
     p.add_argument("--html", default=None, metavar="FILE", help="write an HTML preview")
     p.add_argument("--tol", type=float, default=None, metavar="TOL",
                    help="pick the Taylor order (1-8) instead of the study's: the lowest whose "
-                   "next-order estimate of the relative frequency error along the trajectory "
-                   "(at y0 and the design-box corners) meets TOL; reported with its estimate")
+                   "estimate of the relative frequency error (the larger of the next two "
+                   "orders' terms) along the trajectory (at y0 and the design-box corners) "
+                   "meets TOL; reported with its estimate")
     p.add_argument("--points-tol", type=float, default=None, metavar="TOL",
                    help="expand at several points instead of the study's q0: the fewest "
                    "expansion points along the trajectory (then the lowest order, 1-8) whose "
@@ -158,7 +159,7 @@ def cmd_assign(args: argparse.Namespace) -> int:
     print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
     choice = result.taylor.order_choice
     if choice is not None:
-        print(f"Taylor order {choice['order']} for --tol {choice['tol']:g} (next-order estimate "
+        print(f"Taylor order {choice['order']} for --tol {choice['tol']:g} (two-term estimate "
               f"{choice['estimate']:.3g} along the trajectory and design-box corners)")
     points = _points_choice(result.taylor)
     if points is not None:

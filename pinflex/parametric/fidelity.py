@@ -1,22 +1,32 @@
-"""The Taylor order a tolerance needs: next-order estimates over the samples of use.
+"""The Taylor order a tolerance needs: two-term estimates over the samples of use.
 
 A Taylor model of order ``p`` is judged where it will be evaluated (samples of joints and
-design values). Its truncation error is estimated by the next order: with ``T_p`` the
-polynomial of order ``p`` and ``D_{p+1}`` the sum of its degree-``p + 1`` terms,
+design values). With ``T_p`` the polynomial of order ``p`` and ``D_{p+1}`` the sum of its
+degree-``p + 1`` terms, the relative change the next order would make is
 
     e_p(x) = |D_{p+1}(x)| / |T_{p+1}(x)|,
 
-the relative change the next order would make. One expansion at order ``P`` gives every
-``e_p`` for ``p < P`` (the coefficients of degree ≤ ``p`` do not depend on the order the
-expansion was run at), so :func:`order_for_tolerance` expands at a ladder of orders (3, 5,
-7, …) until some ``e_p`` over all samples and modes meets the tolerance, and returns the
-model of the lowest such order: no more model than the samples need.
+and the truncation error of order ``p`` is estimated by the larger of the next two orders'
+terms,
 
-This is an estimate, not a bound: it assumes the omitted series is led by its first term. On
-benchmark A's trajectory (modes 1–3, nominal design) it is 0.88–1.9 × the actual error for
-orders 1–8, on the flexible UR5 at 40 samples within ±0.1 rad of a general pose 0.83–1.1 × for
-orders 1–5 (``python benchmarks/bench_taylor_fidelity.py``); where it is below the actual error,
-by up to ~20 % there, the chosen model can miss the tolerance by that much.
+    E_p(x) = max(e_p(x), e_{p+1}(x)).
+
+One term alone vanishes wherever that order's coefficients do: at a pose where the frequency
+is even in the joint offsets (benchmark A with the arm stretched, elbow offsets within
+±0.4 rad) the odd terms are zero, so ``e_2`` was ~1e-19 for an order-2 model whose exact
+error is 5.4e-3; the second term is the first non-vanishing one there. One expansion at order
+``P`` gives every ``E_p`` for ``p ≤ P − 2`` (the coefficients of degree ≤ ``p`` do not depend
+on the order the expansion was run at), so :func:`order_for_tolerance` expands at a ladder of
+orders (4, 6, 8, …) until some ``E_p`` over all samples and modes meets the tolerance, and
+returns the model of the lowest such order: no more model than the samples need.
+
+This is an estimate, not a bound: it assumes the omitted series is led by its first
+non-vanishing term, and two consecutive orders that both vanish along the samples would still
+fool it. Against the exact frequencies (``python benchmarks/bench_taylor_fidelity.py``) it is
+1.06–1.92 × the actual error on benchmark A's trajectory (modes 1–3, orders 1–8; the single
+term was 0.88 × at order 1) and 0.83–1.11 × on the flexible UR5 at 40 samples within ±0.1 rad
+of a general pose (orders 1–5); where it is below the actual error, the chosen model can miss
+the tolerance by that factor.
 """
 
 from __future__ import annotations
@@ -32,7 +42,8 @@ from pinflex.jets.evaluation import monomial_rows
 from pinflex.parametric.model import TaylorModel, expand
 from pinflex.resources import MAX_TAYLOR_ORDER
 
-__all__ = ["OrderChoice", "next_order_estimates", "order_for_tolerance"]
+__all__ = ["OrderChoice", "next_order_estimates", "order_for_tolerance",
+           "two_term_estimates"]
 
 
 @dataclass(frozen=True)
@@ -42,7 +53,8 @@ class OrderChoice:
     Attributes:
         model: The Taylor model of the chosen order.
         order: The chosen order p.
-        estimate: Its next-order estimate ``max e_p`` over samples and modes.
+        estimate: Its two-term estimate ``max E_p`` over samples and modes
+            (``E_p = max(e_p, e_(p+1))``, see the module docstring).
         estimates: ``{order: estimate}`` of every order judged.
         tol: The tolerance.
     """
@@ -79,11 +91,34 @@ def next_order_estimates(tm: TaylorModel, Q, Y=None, *, quantity: str = "freq_hz
     return np.where(np.isfinite(est), est, np.inf)
 
 
+def two_term_estimates(tm: TaylorModel, Q, Y=None, *, quantity: str = "freq_hz"
+                       ) -> np.ndarray:
+    """Two-term estimates ``E_p`` (order, samples, modes) for ``p = 0 .. tm.order − 2``.
+
+    ``E_p = max(e_p, e_(p+1))``: the larger of the next two orders' relative terms
+    (:func:`next_order_estimates`), so that a vanishing next-order coefficient (a pose where
+    the frequency is even in a joint) does not report a tiny error.
+
+    Args:
+        tm: A Taylor model of order ``P ≥ 2``.
+        Q: Joint samples (n, nv), user coordinates.
+        Y: Design values (n, ny) or (ny,) [kg] (default the model's ``y0``).
+        quantity: 'freq_hz' or 'eigval'.
+    """
+    if tm.order < 2:
+        raise ConfigurationError("two-term estimates need a Taylor model of order >= 2")
+    e = next_order_estimates(tm, Q, Y, quantity=quantity)
+    return np.maximum(e[:-1], e[1:])
+
+
 def order_for_tolerance(model: FlexibleModel, q0, y0=None, *, Q, Y=None, tol: float,
                         modes: Sequence[int] = (1,), orders: Sequence[int] | None = None,
                         quantity: str = "freq_hz", joints: Sequence[str] | None = None,
                         design: Sequence[str] | None = None) -> OrderChoice:
-    """The lowest Taylor order whose next-order estimate over the samples meets ``tol``.
+    """The lowest Taylor order whose two-term estimate over the samples meets ``tol``.
+
+    Order ``p`` is judged by ``max(e_p, e_(p+1))`` (the larger of the next two orders'
+    relative terms, from an expansion at least two orders higher; see the module docstring).
 
     Args:
         model: The flexible model.
@@ -93,7 +128,8 @@ def order_for_tolerance(model: FlexibleModel, q0, y0=None, *, Q, Y=None, tol: fl
         Y: Their design values (n, ny) or (ny,) [kg] (default ``y0``).
         tol: Relative tolerance on ``quantity``.
         modes: Non-rigid modes (every one must meet ``tol``).
-        orders: Orders allowed (default 1–8).
+        orders: Orders allowed (default 1–8; at most ``MAX_TAYLOR_ORDER − 2``, each is judged
+            by the next two).
         quantity: 'freq_hz' or 'eigval'.
         joints: Joints to expand (default all).
         design: Design variables to expand (default all).
@@ -106,28 +142,29 @@ def order_for_tolerance(model: FlexibleModel, q0, y0=None, *, Q, Y=None, tol: fl
             and np.isfinite(tol)):
         raise ConfigurationError(f"tol = {tol!r}: give a positive relative tolerance")
     allowed = sorted({int(p) for p in (range(1, 9) if orders is None else orders)})
-    if not allowed or allowed[0] < 1 or allowed[-1] >= MAX_TAYLOR_ORDER:
+    if not allowed or allowed[0] < 1 or allowed[-1] > MAX_TAYLOR_ORDER - 2:
         raise ConfigurationError(
-            f"orders {allowed}: give orders from 1 to {MAX_TAYLOR_ORDER - 1} (each is judged "
-            "by the next one)")
+            f"orders {allowed}: give orders from 1 to {MAX_TAYLOR_ORDER - 2} (each is judged "
+            "by the next two)")
     estimates: dict[int, float] = {}
-    top = 3
+    top = 4
     while True:
-        top = min(top, allowed[-1] + 1)  # expansions at orders 3, 5, 7, ...: each judges below
+        # expansions at orders 4, 6, 8, ...: each judges the orders up to two below it
+        top = min(top, allowed[-1] + 2)
         tm = expand(model, q0, y0, order=top, modes=modes, joints=joints, design=design)
-        est = next_order_estimates(tm, Q, Y, quantity=quantity)
-        for p in range(1, top):
+        est = two_term_estimates(tm, Q, Y, quantity=quantity)
+        for p in range(1, top - 1):
             estimates[p] = float(np.max(est[p]))
         hit = [p for p in allowed if p in estimates and estimates[p] <= tol]
         if hit:
             p = hit[0]
             chosen = expand(model, q0, y0, order=p, modes=modes, joints=joints, design=design)
             return OrderChoice(chosen, p, estimates[p], dict(estimates), float(tol))
-        if top == allowed[-1] + 1:
+        if top == allowed[-1] + 2:
             break
         top += 2
     best = min(estimates, key=lambda p: estimates[p])
     raise ConfigurationError(
         f"no Taylor order in {allowed} meets tol = {tol:g} on these samples (best: order "
-        f"{best}, next-order estimate {estimates[best]:.3g}); expand closer or use several "
+        f"{best}, two-term estimate {estimates[best]:.3g}); expand closer or use several "
         "expansion points (pinflex.parametric.expand_along)")

@@ -895,8 +895,9 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         modes: Non-rigid mode numbers to expand, 1 = lowest (default: mode 1).
         joints: Names of the joints to expand (default: all moving joints).
         design: Names of the design variables to expand (default: all).
-        tol: Pick the order instead: the lowest order up to ``order`` (at least 1) whose
-            next-order estimate of the relative frequency error over ``over`` meets ``tol``
+        tol: Pick the order instead: the lowest order up to ``order`` (at least 1, at most
+            10) whose two-term estimate of the relative frequency error over ``over`` (the
+            larger of the next two orders' relative terms) meets ``tol``
             (:func:`pinflex.parametric.fidelity.order_for_tolerance`); the choice and its
             estimate are in ``order_choice``.
         over: With ``tol``: the samples where the model will be used, joint values (n, nv)
@@ -1022,7 +1023,7 @@ class _SolverRefused(Exception):
 
 
 def _expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over):
-    """:func:`expand` with ``tol``: the order from next-order estimates over ``over``."""
+    """:func:`expand` with ``tol``: the order from two-term estimates over ``over``."""
     import dataclasses
 
     from pinflex.parametric.fidelity import order_for_tolerance
@@ -1037,8 +1038,9 @@ def _expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over
     info = MappingProxyType({"tol": choice.tol, "order": choice.order,
                              "estimate": choice.estimate,
                              "estimates": MappingProxyType(dict(choice.estimates)),
-                             "method": "next-order estimate |T_(p+1) - T_p| / |T_(p+1)|, "
-                                       "frequency [Hz], max over samples and modes"})
+                             "method": "two-term estimate max(|T_(p+1) - T_p| / |T_(p+1)|, "
+                                       "|T_(p+2) - T_(p+1)| / |T_(p+2)|), frequency [Hz], "
+                                       "max over samples and modes"})
     return dataclasses.replace(choice.model, order_choice=info)
 
 
