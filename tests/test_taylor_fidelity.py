@@ -173,3 +173,28 @@ def test_order_by_tolerance_is_not_fooled_by_a_vanishing_next_order():
     assert choice.estimates[choice.order - 1] > 1e-3
     tm = expand(arm, q0, order=8, design=[], tol=1e-3, over=Q)
     assert tm.order == choice.order and "two" in tm.order_choice["method"]
+
+
+@pytest.mark.parametrize("order", [2, 3, 4, 5, 6])
+def test_radius_check_warns_at_a_pose_with_vanishing_odd_terms(order):
+    """Benchmark A stretched, elbow offsets within ±0.8 rad: the radius check still warns.
+
+    The odd Taylor coefficients vanish there (the frequency is even in the offset), so an
+    estimate led by the last coefficient would see nothing at odd orders; orders 2-6 are off
+    by more than 1 % against the independent planar FE and ``evaluate`` must say so at its
+    default 1 % level. (Order 1 does not: its estimate is 0 there, see
+    ``TaylorModel.error_estimate``.)
+    """
+    from reference_fe import planar_two_link_frequencies
+
+    from pinflex.exceptions import TaylorRadiusWarning
+
+    arm = benchmark_model()
+    y0 = arm.check_y(None)
+    q0 = np.array([0.7, 0.7])
+    Q = q0 + np.c_[np.zeros(9), np.linspace(-0.8, 0.8, 9)]
+    ref = np.array([planar_two_link_frequencies(q, *y0)[1][0] for q in Q])
+    tm = expand(arm, q0, order=order, design=[])
+    with pytest.warns(TaylorRadiusWarning, match="mode 1"):
+        value = tm.evaluate(Q, quantity="freq_hz")
+    assert np.max(np.abs(value[:, 0] / ref - 1)) > 0.01

@@ -237,6 +237,16 @@ class TaylorModel:
         benchmark A's trajectory at ``p = 4`` it stays below 0.8 %
         (``python benchmarks/bench_radius.py``).
 
+        Where the series along a ray has vanishing terms it knows only what the model's own
+        orders show. At a pose where the frequency is even in a joint offset (benchmark A
+        stretched, q = (0.7, 0.7), elbow offsets) the odd coefficients and the first-order
+        spectrum rates are zero: an order-1 model's estimate is then 0 (its only coefficient
+        beyond the value vanishes) while it is off by 2.4 % at ±0.4 rad and 6.2 % at ±0.8 rad,
+        unwarned; orders 2–6 are judged by their even coefficients and warn there wherever
+        the error exceeds 1 % (``tests/test_taylor_fidelity.py``). Near such poses use order
+        ≥ 2, or pick the order with :func:`pinflex.parametric.fidelity.order_for_tolerance`,
+        whose two-term estimate sees the next non-vanishing order.
+
         Args:
             dx: Offsets (n, nvars) from the expansion point.
             quantity: 'eigval' or 'freq_hz': whose series is judged.
