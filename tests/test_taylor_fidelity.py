@@ -175,15 +175,15 @@ def test_order_by_tolerance_is_not_fooled_by_a_vanishing_next_order():
     assert tm.order == choice.order and "two" in tm.order_choice["method"]
 
 
-@pytest.mark.parametrize("order", [2, 3, 4, 5, 6])
+@pytest.mark.parametrize("order", [1, 2, 3, 4, 5, 6])
 def test_radius_check_warns_at_a_pose_with_vanishing_odd_terms(order):
     """Benchmark A stretched, elbow offsets within ±0.8 rad: the radius check still warns.
 
     The odd Taylor coefficients vanish there (the frequency is even in the offset), so an
     estimate led by the last coefficient would see nothing at odd orders; orders 2-6 are off
     by more than 1 % against the independent planar FE and ``evaluate`` must say so at its
-    default 1 % level. (Order 1 does not: its estimate is 0 there, see
-    ``TaylorModel.error_estimate``.)
+    default 1 % level. Order 1 has nothing to judge its error by there (its first-order
+    part vanishes): it must say that it cannot estimate it, not report an estimate of 0.
     """
     from reference_fe import planar_two_link_frequencies
 
@@ -195,6 +195,13 @@ def test_radius_check_warns_at_a_pose_with_vanishing_odd_terms(order):
     Q = q0 + np.c_[np.zeros(9), np.linspace(-0.8, 0.8, 9)]
     ref = np.array([planar_two_link_frequencies(q, *y0)[1][0] for q in Q])
     tm = expand(arm, q0, order=order, design=[])
-    with pytest.warns(TaylorRadiusWarning, match="mode 1"):
+    match = "cannot estimate its error" if order == 1 else "estimated truncation error"
+    with pytest.warns(TaylorRadiusWarning, match=f"mode 1 .*{match}"):
         value = tm.evaluate(Q, quantity="freq_hz")
     assert np.max(np.abs(value[:, 0] / ref - 1)) > 0.01
+    est, ratio = tm.error_estimate(tm.offsets(Q), quantity="freq_hz")
+    at_q0 = np.flatnonzero(np.all(Q == q0, axis=1))
+    if order == 1:  # unknown away from q0, and exactly known (0) at q0 itself
+        moved = np.setdiff1d(np.arange(len(Q)), at_q0)
+        assert np.all(np.isinf(est[moved, 0])) and np.all(np.isnan(ratio[moved, 0]))
+    assert np.all(est[at_q0] == 0.0)

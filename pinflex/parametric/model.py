@@ -240,12 +240,15 @@ class TaylorModel:
         Where the series along a ray has vanishing terms it knows only what the model's own
         orders show. At a pose where the frequency is even in a joint offset (benchmark A
         stretched, q = (0.7, 0.7), elbow offsets) the odd coefficients and the first-order
-        spectrum rates are zero: an order-1 model's estimate is then 0 (its only coefficient
-        beyond the value vanishes) while it is off by 2.4 % at ±0.4 rad and 6.2 % at ±0.8 rad,
-        unwarned; orders 2–6 are judged by their even coefficients and warn there wherever
-        the error exceeds 1 % (``tests/test_taylor_fidelity.py``). Near such poses use order
-        ≥ 2, or pick the order with :func:`pinflex.parametric.fidelity.order_for_tolerance`,
-        whose two-term estimate sees the next non-vanishing order.
+        spectrum rates are zero. An order-1 model has then nothing to judge its error by
+        (it is off by 2.4 % at ±0.4 rad and 6.2 % at ±0.8 rad there): where its first-order
+        part vanishes along a non-zero offset the estimate is ``inf`` with ratio NaN, and
+        :meth:`check_radius` / :meth:`evaluate` warn that the error cannot be estimated (also
+        along directions the quantity does not depend on at all; use order ≥ 2 there).
+        Orders 2–6 are judged by their even coefficients and warn there wherever the error
+        exceeds 1 % (``tests/test_taylor_fidelity.py``). Near such poses use order ≥ 2, or
+        pick the order with :func:`pinflex.parametric.fidelity.order_for_tolerance`, whose
+        two-term estimate sees the next non-vanishing order.
 
         Args:
             dx: Offsets (n, nvars) from the expansion point.
@@ -253,7 +256,8 @@ class TaylorModel:
             mon: Monomials of ``dx`` when the caller has them.
 
         Returns:
-            ``(estimate, ratio)``: relative error estimates and ``t / R``, each (n, k).
+            ``(estimate, ratio)``: relative error estimates and ``t / R``, each (n, k)
+            (``inf`` and NaN where an order-1 model cannot estimate its error, see above).
         """
         dx = np.atleast_2d(np.asarray(dx, dtype=float))
         if mon is None:
@@ -281,6 +285,14 @@ class TaylorModel:
         # no errstate context here (it costs more than the arithmetic): guard the divisions
         est = tail * rho / (np.maximum(1.0 - rho, 1e-12) * c0)
         est[rho >= 1.0] = np.inf
+        if p == 1:
+            # an order-1 model whose first-order part vanishes along a sample's offset (a pose
+            # where the quantity is even in it) has nothing to judge its error by: unknown,
+            # reported as such (ratio NaN) instead of an estimate of 0
+            blind = (rho <= 1e-12) & np.any(dx != 0.0, axis=1)[:, None]
+            if blind.any():
+                est[blind] = np.inf
+                rho = np.where(blind, np.nan, rho)
         return est, rho, value
 
     def _spectral_radius(self, rays: np.ndarray) -> np.ndarray:
@@ -322,9 +334,14 @@ class TaylorModel:
         worst = float(np.max(est)) if est.size else 0.0
         if worst > tol:
             s, c = np.unravel_index(int(np.argmax(est)), est.shape)
-            where = (f"beyond its estimated convergence radius (distance {ratio[s, c]:.2f}x "
-                     "the radius)" if not np.isfinite(worst)
-                     else f"where its estimated truncation error is {100 * worst:.3g} %")
+            if np.isnan(ratio[s, c]):
+                where = ("where it cannot estimate its error (its first-order part vanishes "
+                         "along the offset: use order >= 2)")
+            elif not np.isfinite(worst):
+                where = (f"beyond its estimated convergence radius (distance "
+                         f"{ratio[s, c]:.2f}x the radius)")
+            else:
+                where = f"where its estimated truncation error is {100 * worst:.3g} %"
             text = (f"Taylor model of mode {self.modes[c]} (order {self.order}) evaluated "
                     f"{where} at sample {s} (tolerance {100 * tol:.3g} %): expand closer, "
                     "raise the order, or use several expansion points "
@@ -440,7 +457,7 @@ class TaylorModel:
         if not (warn or strict) or not rows.shape[1]:  # (no sample: nothing to judge)
             return (plan.values[key] @ rows).T
         checked = plan.checked.get(key)
-        if checked is None:  # no screen for this model (order 0, a vanishing eigenvalue)
+        if checked is None:  # no screen (order 0 or 1, a vanishing eigenvalue)
             return self._checked_slow(rows.T, dx, Qa, Y, key, tol, strict)
         # one product: the value and, per check row, every sample's order-j part or rate
         S = checked @ rows
@@ -638,7 +655,7 @@ class _EvaluationPlan:
         for (quantity, linear), value in values.items():
             full = tm.coefficient_matrices[quantity, False]
             c0 = np.abs(full[0])
-            if (p < 1 or not np.all(c0 > 1e-250) or not np.all(np.isfinite(full))
+            if (p < 2 or not np.all(c0 > 1e-250) or not np.all(np.isfinite(full))
                     or (W is not None and not np.all(np.isfinite(W)))):
                 continue
             cols = np.zeros((space.ncoef, k, groups))  # mode-major: a mode's rows together
