@@ -5,7 +5,7 @@ import sys
 
 from conftest import ROOT, TWO_LINK
 
-HEAVY = ("scipy", "matplotlib", "meshcat", "dask", "proxsuite")
+HEAVY = ("scipy", "matplotlib", "meshcat", "dask", "proxsuite", "numba", "llvmlite")
 
 
 def _loaded(code: str) -> set[str]:

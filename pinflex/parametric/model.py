@@ -35,6 +35,20 @@ _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python-level wr
 _dot, _abs, _mul, _sub, _matmul = np.dot, np.abs, np.multiply, np.subtract, np.matmul
 
 
+_KERNEL: list = []  # [the compiled two-joint evaluation, or None without numba], once looked up
+
+
+def _grid_kernel():
+    """The compiled :class:`_PowerGrid` evaluation (numba imported here, on first use only)."""
+    if not _KERNEL:
+        try:
+            from pinflex.parametric._grid_kernel import grid_values
+        except ImportError:  # numba missing or broken on this platform: the NumPy path
+            grid_values = None
+        _KERNEL.append(grid_values)
+    return _KERNEL[0]
+
+
 @dataclass(frozen=True)
 class TaylorModel:
     """Taylor polynomials of eigenvalues around ``(q0, y0)`` (paper 000 eq. 4 and 7–9).
@@ -383,8 +397,16 @@ class TaylorModel:
             coef = grid.values.get((quantity, linear_in_design))
             Qa = np.asarray(Q, dtype=float)
             if coef is not None and Qa.ndim == 2 and Qa.shape[1] == 2 and Qa.shape[0]:
-                n = Qa.shape[0]
                 checked = True if warn or strict else False
+                kernel = _KERNEL[0] if _KERNEL else _grid_kernel()
+                if kernel is not None:  # one compiled call (output of its own: no lock)
+                    value, t2 = kernel(Qa, grid.q0, coef, grid.form, grid.k, checked)
+                    if not checked or t2 <= grid.limits.get(
+                            (quantity, linear_in_design, tol), -1.0):
+                        return value  # (screen 1, see _PowerGrid)
+                    # screen 1 not passed (or its level not yet known): the NumPy path
+                    # below finds the level, runs screen 2 and the per-sample estimate
+                n = Qa.shape[0]
                 if plan.lock.acquire(False):  # this thread owns the kept arrays
                     try:
                         run, P = (grid.scratch[checked].get(n)
