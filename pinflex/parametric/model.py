@@ -738,7 +738,10 @@ class _PowerGrid:
     out so that both operands are contiguous: the product also runs over the y-rows,
     against zeros) and one matrix-vector product summing over ``a``. Five NumPy calls and
     one subtraction, against ``2 (p − 1)`` row-slice products and a GEMM of the general
-    monomial rows.
+    monomial rows. When numba is available, :meth:`TaylorModel.evaluate` runs all of it (and
+    ``τ²`` of screen 1) as one compiled call instead (``_grid_kernel.grid_values``: the same
+    products, equal to round-off); this NumPy form stays the fallback and computes the powers
+    screen 2 needs.
 
     The radius check is screened in two steps before the per-sample estimate, each an
     upper bound of every sample's estimate (so the decisions are those of the per-sample
