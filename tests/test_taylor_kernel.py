@@ -140,3 +140,19 @@ def test_numba_is_imported_only_by_the_two_joint_evaluation():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "True"]
+
+
+def test_without_numba_the_numpy_path_gives_the_same_values_and_decisions(arm, monkeypatch):
+    """The fallback (kernel unavailable) equals the kernel's values and warns alike."""
+    tm = expand(arm, Q0, order=4, modes=(1, 2), design=[])
+    rng = np.random.default_rng(8)
+    Q = Q0 + 0.3 * rng.uniform(-1, 1, size=(29, 2))
+    with_kernel = tm.evaluate(Q, quantity="freq_hz", warn=False)
+    est, _ = tm.error_estimate(tm.offsets(Q, warn=False), quantity="freq_hz")
+    worst = float(np.max(est))
+    decided = [_warned(tm, Q, quantity="freq_hz", tol=t) for t in (worst * 0.999, worst * 1.001)]
+    monkeypatch.setattr(taylor, "_KERNEL", [None])
+    np.testing.assert_allclose(tm.evaluate(Q, quantity="freq_hz", warn=False), with_kernel,
+                               rtol=1e-14, atol=0)
+    assert [_warned(tm, Q, quantity="freq_hz", tol=t)
+            for t in (worst * 0.999, worst * 1.001)] == decided == [True, False]
