@@ -71,6 +71,7 @@ def test_kernel_equals_the_numpy_grid_path(arm, order, modes):
 
 def test_kernel_decisions_equal_the_per_sample_estimate(arm):
     """Warn and strict decide as the per-sample estimate at tolerances straddling the worst."""
+    assert taylor.prepare_kernel()  # the decisions below are the kernel's
     tm = expand(arm, Q0, order=4, modes=(1, 2), design=[])
     rng = np.random.default_rng(3)
     for scale in (0.05, 0.3, 1.0):
@@ -128,22 +129,32 @@ def test_other_models_keep_the_numpy_path(arm, case):
     np.testing.assert_allclose(got, ref, rtol=1e-13, atol=0)
 
 
-def test_numba_is_imported_only_by_the_two_joint_evaluation():
-    """``import pinflex.parametric`` and an expansion do not load numba; the evaluation does."""
-    code = (f"import sys, numpy as np\nfrom pinflex.erls import FlexibleModel\n"
-            f"from pinflex.parametric import expand\n"
+def test_numba_is_loaded_only_by_many_two_joint_evaluations():
+    """A few two-joint evaluations do not load numba; many prepare the kernel in the background.
+
+    After ``KERNEL_AFTER`` evaluations the kernel is prepared in a thread and later calls take
+    it, with the values of the NumPy path.
+    """
+    code = (f"import sys, threading, numpy as np\nfrom pinflex.erls import FlexibleModel\n"
+            f"from pinflex.parametric import expand, model\n"
             f"a = FlexibleModel({str(TWO_LINK)!r}, planar=True)\n"
             f"tm = expand(a, np.array({Q0.tolist()}), order=2, design=[])\n"
+            f"Q = np.array([{Q0.tolist()}])\n"
             "print('numba' in sys.modules)\n"
-            f"tm.evaluate(np.array([{Q0.tolist()}]), warn=False)\n"
-            "print('numba' in sys.modules)\n")
+            "for _ in range(model.KERNEL_AFTER - 1): v = tm.evaluate(Q, warn=False)\n"
+            "print('numba' in sys.modules, bool(model._KERNEL))\n"
+            "w = tm.evaluate(Q, warn=False)\n"
+            "[t.join() for t in threading.enumerate() if t.name == 'pinflex-taylor-kernel']\n"
+            "print('numba' in sys.modules, model._KERNEL[0] is not None)\n"
+            "print(np.array_equal(tm.evaluate(Q, warn=False), w))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
-    assert out == ["False", "True"]
+    assert out == ["False", "False", "False", "True", "True", "True"]
 
 
 def test_without_numba_the_numpy_path_gives_the_same_values_and_decisions(arm, monkeypatch):
     """The fallback (kernel unavailable) equals the kernel's values and warns alike."""
+    assert taylor.prepare_kernel()
     tm = expand(arm, Q0, order=4, modes=(1, 2), design=[])
     rng = np.random.default_rng(8)
     Q = Q0 + 0.3 * rng.uniform(-1, 1, size=(29, 2))

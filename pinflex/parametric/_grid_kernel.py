@@ -1,10 +1,12 @@
 """Compiled evaluation of two-joint Taylor models (see ``model._PowerGrid``).
 
-Imported only by :meth:`pinflex.parametric.TaylorModel.evaluate` the first time a two-joint
-model is evaluated, so nothing else pays for numba. One call builds the powers of both
-offsets, contracts them with the coefficient grid and, when asked, returns the largest
-``τ² = dxᵀ A dx`` of the samples for the first radius screen. Compiled on first use and cached
-on disk (next to this file, or numba's user cache directory when this one is not writable).
+Imported only by :func:`pinflex.parametric.model.prepare_kernel`, which
+:meth:`pinflex.parametric.TaylorModel.evaluate` runs in a background thread after a process's
+first ``KERNEL_AFTER`` two-joint evaluations (or a caller runs at once), so nothing else pays
+for numba. One call builds the powers of both offsets, contracts them with the coefficient
+grid and, when asked, returns the largest ``τ² = dxᵀ A dx`` of the samples for the first
+radius screen. Cached on disk (next to this file, or numba's user cache directory when this
+one is not writable).
 """
 
 from __future__ import annotations

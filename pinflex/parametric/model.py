@@ -35,18 +35,65 @@ _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python-level wr
 _dot, _abs, _mul, _sub, _matmul = np.dot, np.abs, np.multiply, np.subtract, np.matmul
 
 
-_KERNEL: list = []  # [the compiled two-joint evaluation, or None without numba], once looked up
+_KERNEL: list = []  # [the compiled two-joint evaluation, or None without numba], once ready
+KERNEL_AFTER = 500
+"""Two-joint evaluations in one process after which the compiled kernel is prepared.
+
+Importing numba and compiling (or loading the cached compilation of) the kernel costs
+1.2–2.7 s once per process, the NumPy path ~20 µs per call: a process that evaluates a few
+times never pays for numba. After this many calls the kernel is prepared in a background
+thread while the NumPy path keeps answering (same values to round-off, same radius decisions);
+calls take the kernel once it is ready. :func:`prepare_kernel` prepares it at once."""
+_KERNEL_LOCK = threading.Lock()
+_KERNEL_STATE = {"calls": 0, "started": False}
 
 
 def _grid_kernel():
-    """The compiled :class:`_PowerGrid` evaluation (numba imported here, on first use only)."""
+    """The compiled :class:`_PowerGrid` evaluation, prepared now (numba imported here only).
+
+    Returns None when numba is not available (the NumPy path is then used).
+    """
     if not _KERNEL:
-        try:
-            from pinflex.parametric._grid_kernel import grid_values
-        except ImportError:  # numba missing or broken on this platform: the NumPy path
-            grid_values = None
-        _KERNEL.append(grid_values)
+        with _KERNEL_LOCK:
+            if not _KERNEL:
+                try:
+                    from pinflex.parametric._grid_kernel import grid_values
+                except ImportError:  # numba missing or broken on this platform: NumPy path
+                    grid_values = None
+                if grid_values is not None:  # compile (or load) both sample layouts now,
+                    q = np.zeros((2, 2))  # with the argument types of _PowerGrid's fields
+                    coef = _readonly(np.zeros((3, 3)))
+                    form = _readonly(np.zeros(3))
+                    for sample in (q, np.asfortranarray(q)):  # C and F, writeable or not
+                        for s in (sample, _readonly(sample.copy(order="A"))):
+                            grid_values(s, np.zeros(2), coef, form, 1, True)
+                _KERNEL.append(grid_values)
     return _KERNEL[0]
+
+
+def prepare_kernel() -> bool:
+    """Prepare the compiled two-joint Taylor evaluation now.
+
+    Otherwise it is prepared in the background after :data:`KERNEL_AFTER` evaluations in a
+    process.
+
+    Returns:
+        True when the compiled evaluation is available (numba installed), else False.
+    """
+    return _grid_kernel() is not None
+
+
+def _kernel_when_ready():
+    """The kernel once prepared, else None (counting calls; preparing it in the background)."""
+    state = _KERNEL_STATE
+    state["calls"] += 1
+    if state["calls"] >= KERNEL_AFTER and not state["started"]:
+        with _KERNEL_LOCK:
+            if not state["started"]:
+                state["started"] = True
+                threading.Thread(target=_grid_kernel, name="pinflex-taylor-kernel",
+                                 daemon=True).start()
+    return None
 
 
 @dataclass(frozen=True)
@@ -398,7 +445,7 @@ class TaylorModel:
             Qa = np.asarray(Q, dtype=float)
             if coef is not None and Qa.ndim == 2 and Qa.shape[1] == 2 and Qa.shape[0]:
                 checked = True if warn or strict else False
-                kernel = _KERNEL[0] if _KERNEL else _grid_kernel()
+                kernel = _KERNEL[0] if _KERNEL else _kernel_when_ready()
                 if kernel is not None:  # one compiled call (output of its own: no lock)
                     value, t2 = kernel(Qa, grid.q0, coef, grid.form, grid.k, checked)
                     if not checked or t2 <= grid.limits.get(
