@@ -36,6 +36,42 @@ def _separable_pairs(order: int, nj: int, nd: int):
     return np.array(ia), np.array(ib), np.array(tg)
 
 
+def channel_jets(model, order: int, y0, design_idx):
+    """Each design channel's value as a jet in the expanded design variables, after the checks.
+
+    The sections of ``y0`` are checked (:func:`pinflex.erls.design.check_sections`) first.
+
+    Args:
+        model: The flexible model.
+        order: Jet order.
+        y0: Expansion design, (ny,).
+        design_idx: Expanded design variables (indices into ``model.design``).
+
+    Returns:
+        ``(f, f0)``: per channel, its coefficients (writable copies) in the design variables'
+        own jet space (one constant when none is expanded), and its value at the nominal
+        design ``model.y0``.
+    """
+    y0 = np.asarray(y0, dtype=float)
+    names = [d.name for d in model.design]
+    nominal = model.y0
+    f0 = erls_design.channel_values(model, lambda n: nominal[names.index(n)])
+    erls_design.check_sections(model, lambda n: y0[names.index(n)])
+    if not len(design_idx):
+        return [np.array([float(v)]) for v in
+                erls_design.channel_values(model, lambda n: float(y0[names.index(n)]))], f0
+    dspace = JetSpace(len(design_idx), order)
+    var_of = {names[j]: k for k, j in enumerate(design_idx)}
+
+    def get(name):
+        j = names.index(name)
+        if name in var_of:
+            return Scalar.variable(dspace, var_of[name], y0[j])
+        return float(y0[j])
+
+    return [coefficients(dspace, v).copy() for v in erls_design.channel_values(model, get)], f0
+
+
 def add_jets(model, space: JetSpace, terms, alg, joint_idx, design_idx, y0, M, K):
     """Add the design-parameter channels to the jets ``M``, ``K`` of the full space.
 
@@ -53,30 +89,13 @@ def add_jets(model, space: JetSpace, terms, alg, joint_idx, design_idx, y0, M, K
     if not model.design_channels:
         return M, K
     nj, nd = len(joint_idx), len(design_idx)
-    y0 = np.asarray(y0, dtype=float)
-    names = [d.name for d in model.design]
-    nominal = model.y0
-    f0 = erls_design.channel_values(model, lambda n: nominal[names.index(n)])
-    erls_design.check_sections(model, lambda n: y0[names.index(n)])
+    f, f0 = channel_jets(model, space.order, y0, design_idx)
     if nd:
-        dspace = JetSpace(nd, space.order)
-        var_of = {names[j]: k for k, j in enumerate(design_idx)}
-
-        def get(name):
-            j = names.index(name)
-            if name in var_of:
-                return Scalar.variable(dspace, var_of[name], y0[j])
-            return float(y0[j])
-
-        f = [coefficients(dspace, v) for v in erls_design.channel_values(model, get)]
         ia, ib, tg = _separable_pairs(space.order, nj, nd)
     else:
-        f = [np.array([float(v)]) for v in
-             erls_design.channel_values(model, lambda n: float(y0[names.index(n)]))]
         ia = np.arange(space.ncoef)
         ib = np.zeros(space.ncoef, dtype=int)
         tg = np.arange(space.ncoef)
-    f = [fc.copy() for fc in f]
     for fc, fc0 in zip(f, f0):
         fc[0] -= fc0
     which = [bool(np.any(fc)) for fc in f]

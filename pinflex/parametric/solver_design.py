@@ -38,8 +38,7 @@ from pinflex import beam
 from pinflex.erls import design as erls_design
 from pinflex.erls import solve
 from pinflex.jets import JetSpace
-from pinflex.jets.scalar import Scalar, coefficients
-from pinflex.parametric.design import _separable_pairs
+from pinflex.parametric.design import _separable_pairs, channel_jets
 
 _K_NAMES = ("EA", "GJ", "EIy", "EIz")
 
@@ -202,24 +201,10 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
     if channels:
         names = [d.name for d in model.design]
         y0 = np.asarray(y0, dtype=float)
-        nominal = model.y0
-        f0 = erls_design.channel_values(model, lambda n: nominal[names.index(n)])
-        erls_design.check_sections(model, lambda n: y0[names.index(n)])
+        f, f0 = channel_jets(model, space.order, y0, design_idx)
         if nd_vars:
-            dspace = JetSpace(nd_vars, space.order)
-            var_of = {names[j]: k for k, j in enumerate(design_idx)}
-
-            def get(name):
-                j = names.index(name)
-                if name in var_of:
-                    return Scalar.variable(dspace, var_of[name], y0[j])
-                return float(y0[j])
-
-            f = [coefficients(dspace, v).copy() for v in erls_design.channel_values(model, get)]
             ia, ib, tg = _separable_pairs(space.order, nj, nd_vars)
         else:
-            f = [np.array([float(v)]) for v in
-                 erls_design.channel_values(model, lambda n: float(y0[names.index(n)]))]
             ia, ib, tg = np.arange(nq), np.zeros(nq, dtype=int), emb
         # the constant coefficient from the float formulas: exactly zero at the nominal design
         # (the jet arithmetic may round the same value differently)
