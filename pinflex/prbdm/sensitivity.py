@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cache
 
 import numpy as np
 import pinocchio as pin
@@ -332,14 +333,9 @@ class _Indices:
         self.db = db
 
 
-_INDICES: dict[int, _Indices] = {}
-
-
+@cache
 def _indices(n: int) -> _Indices:
-    found = _INDICES.get(n)
-    if found is None:
-        found = _INDICES.setdefault(n, _Indices(n))
-    return found
+    return _Indices(n)
 
 
 def reference_stiffness_and_derivative(problem: MappingProblem, s: np.ndarray,
@@ -698,14 +694,9 @@ class _PlanarIndices:
         self.eye = np.eye(n)
 
 
-_PLANAR: dict[int, _PlanarIndices] = {}
-
-
+@cache
 def _planar_indices(n: int) -> _PlanarIndices:
-    found = _PLANAR.get(n)
-    if found is None:
-        found = _PLANAR.setdefault(n, _PlanarIndices(n))
-    return found
+    return _PlanarIndices(n)
 
 
 def planar_tip(root_m: float, ell: np.ndarray, theta: np.ndarray) -> np.ndarray:
