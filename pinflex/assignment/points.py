@@ -152,6 +152,7 @@ def points_for_tolerance(model, Q: np.ndarray, y0: np.ndarray, *, tol: float,
     import warnings
 
     from pinflex.parametric import expand_along
+    from pinflex.parametric.fidelity import TWO_TERM_RULE
     from pinflex.tracking import track_modes
 
     if not tol > 0:
@@ -182,16 +183,13 @@ def points_for_tolerance(model, Q: np.ndarray, y0: np.ndarray, *, tol: float,
     models = tuple(expand(model, Q[c], y0, order=cover.order, modes=modes, design=design)
                    for c in centres)
     exact = tr.freq_hz if quantity == "freq_hz" else tr.eigvals
-    max_error = max(float(np.max(np.abs(tm.evaluate(Q[a:b], quantity=quantity, warn=False)
-                                        / exact[a:b] - 1)))
-                    for tm, (a, b) in zip(cover.models, cover.segments))
+    max_error = float(np.max(np.abs(cover.evaluate(Q, quantity=quantity) / exact - 1)))
     choice = {"tol": float(tol), "points": centres, "order": int(cover.order),
               "estimate": float(cover.estimate) if cover.estimate is not None else None,
               "exact_error": max_error,
               "candidates": {int(k): int(v) for k, v in cover.candidates.items()},
-              "method": "two-term estimate max(|T_(p+1) - T_p| / |T_(p+1)|, "
-                        "|T_(p+2) - T_(p+1)| / |T_(p+2)|) at every sample at y0; fewest "
-                        "points, then lowest order"}
+              "method": f"{TWO_TERM_RULE} at every sample at y0; fewest points, then "
+                        "lowest order"}
     if max_error > tol:
         warnings.warn(
             f"expansion points for tol {tol:g}: the exact relative error of the cover at y0 is "

@@ -42,6 +42,10 @@ from pinflex.jets.evaluation import monomial_rows
 from pinflex.parametric.model import TaylorModel, expand
 from pinflex.resources import MAX_TAYLOR_ORDER
 
+TWO_TERM_RULE = ("two-term estimate max(|T_(p+1) - T_p| / |T_(p+1)|, "
+                 "|T_(p+2) - T_(p+1)| / |T_(p+2)|)")
+"""The two-term estimate's formula, as the choices that use it record it."""
+
 __all__ = ["OrderChoice", "next_order_estimates", "order_for_tolerance",
            "two_term_estimates"]
 

@@ -1125,7 +1125,7 @@ def _expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over
     """:func:`expand` with ``tol``: the order from two-term estimates over ``over``."""
     import dataclasses
 
-    from pinflex.parametric.fidelity import order_for_tolerance
+    from pinflex.parametric.fidelity import TWO_TERM_RULE, order_for_tolerance
 
     if over is None:
         raise ConfigurationError("expand(tol=...) needs over=Q (or (Q, Y)): the samples where "
@@ -1137,9 +1137,8 @@ def _expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over
     info = MappingProxyType({"tol": choice.tol, "order": choice.order,
                              "estimate": choice.estimate,
                              "estimates": MappingProxyType(dict(choice.estimates)),
-                             "method": "two-term estimate max(|T_(p+1) - T_p| / |T_(p+1)|, "
-                                       "|T_(p+2) - T_(p+1)| / |T_(p+2)|), frequency [Hz], "
-                                       "max over samples and modes"})
+                             "method": f"{TWO_TERM_RULE}, frequency [Hz], max over "
+                                       "samples and modes"})
     return dataclasses.replace(choice.model, order_choice=info)
 
 
