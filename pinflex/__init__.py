@@ -17,6 +17,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "AssignmentResult": "pinflex.assignment",
     "Beam": "pinflex.native.spec",
+    "FlexibleData": "pinflex.erls",
     "FlexibleModel": "pinflex.erls",
     "Mass": "pinflex.native.spec",
     "Material": "pinflex.native.spec",
@@ -42,6 +43,7 @@ __all__ = [
     "__version__",
     "AssignmentResult",
     "Beam",
+    "FlexibleData",
     "FlexibleModel",
     "Mass",
     "Material",
@@ -70,7 +72,7 @@ if TYPE_CHECKING:
         build_assignment,
     )
     from pinflex.description import RobotDescription, load
-    from pinflex.erls import FlexibleModel, ModalResult
+    from pinflex.erls import FlexibleData, FlexibleModel, ModalResult
     from pinflex.exceptions import PinflexError, PinflexWarning
     from pinflex.native.robots import example_robot
     from pinflex.native.spec import Beam, Mass, Material

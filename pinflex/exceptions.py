@@ -76,6 +76,10 @@ class ConfigurationError(PinflexError):
     """Joint values of the wrong shape or outside what the model accepts."""
 
 
+class ImmutableModelError(PinflexError, AttributeError):
+    """A constant object (a built ``FlexibleModel``) was asked to change: build a new one."""
+
+
 class PlanarModelError(PinflexError):
     """The planar option was asked for a robot that does not move in one plane."""
 

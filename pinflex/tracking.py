@@ -279,10 +279,11 @@ class PoseMap:
 
 
 def _link_maps(model) -> list:
-    """Per flexible link ``(name, core, G = C_x⁻¹ R_x)`` in column order (cached per model)."""
-    cached = model.__dict__.get("_tracking_link_maps")
-    if cached is not None:
-        return cached
+    """Per flexible link ``(name, core, G = C_x⁻¹ R_x)`` in column order (cached per workspace)."""
+    return model.workspace().cached("tracking_link_maps", lambda: _build_link_maps(model))
+
+
+def _build_link_maps(model) -> list:
     from pinflex.erls import solve
 
     plan = solve.solve_plan(model)
@@ -291,7 +292,6 @@ def _link_maps(model) -> list:
         G = np.linalg.solve(c.C[c.x_rows], c.R[c.x_rows])
         G.setflags(write=False)
         out.append((link, c, G))
-    model.__dict__["_tracking_link_maps"] = out
     return out
 
 

@@ -49,12 +49,12 @@ def test_design_of_the_wrong_shape_is_not_silently_cut(two_link_planar):
     np.testing.assert_array_equal(one, two_link_planar.modes(Q0, y=[0.1, 0.2]).freq_hz)
 
 
-def test_set_value_refuses_nan_and_arrays(two_link_planar):
+def test_with_values_refuses_nan_and_arrays(two_link_planar):
     """Point-mass values must be one finite number."""
     model = FlexibleModel(TWO_LINK, planar=True)
     for bad in (np.nan, [0.1, 0.2], "heavy"):
         with pytest.raises(ConfigurationError):
-            model.set_value("m1", bad)
+            model.with_values(m1=bad)
 
 
 def test_taylor_order_is_bounded_before_work(two_link_planar):

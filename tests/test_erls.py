@@ -88,7 +88,7 @@ def test_rigid_model_mass_matrix_equals_pinocchio_crba():
     rng = np.random.default_rng(0)
     for q in rng.uniform(-3, 3, size=(4, rigid.nv)):
         M, _ = rigid.matrices(q, check_bounds=False)
-        Mc = pin.crba(rigid.model, rigid.data, rigid.pin_configuration(q))
+        Mc = pin.crba(rigid.model, rigid.model.createData(), rigid.pin_configuration(q))
         Mc = np.triu(Mc) + np.triu(Mc, 1).T
         # the design payload is in M through the point-mass path, not in the URDF inertia
         payload = rigid.design[0].nominal
@@ -99,8 +99,9 @@ def test_rigid_model_mass_matrix_equals_pinocchio_crba():
 def _point_mass_matrix(model, q):
     """Mass matrix of a unit point mass at the end-effector frame, from Pinocchio."""
     fid = model.model.getFrameId("ee_link")
-    pin.computeJointJacobians(model.model, model.data, model.pin_configuration(q))
-    J = pin.getFrameJacobian(model.model, model.data, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
+    data = model.model.createData()
+    pin.computeJointJacobians(model.model, data, model.pin_configuration(q))
+    J = pin.getFrameJacobian(model.model, data, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
     return J.T @ J
 
 

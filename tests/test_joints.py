@@ -56,20 +56,31 @@ def test_benchmark_a_joint_conditions_match_global_frame(ours, ref, rigid):
     np.testing.assert_allclose(res.freq_hz, f_ref[:3], rtol=1e-9)
 
 
-def test_free_joints_are_the_default_and_annotations_apply_on_request():
-    """<pinflex:joint> annotations are read but only used with joints='annotated'."""
+def test_annotations_are_the_default_and_free_or_locked_override_them():
+    """A file's <pinflex:joint> springs and locks apply unless 'free' or 'locked' is asked."""
     text = TWO_LINK.read_text().replace(
         "<pinflex:coordinates", f'<pinflex:joint name="q1" stiffness="{K1}"/>'
         '<pinflex:joint name="q2" locked="true"/><pinflex:coordinates'
     )
     desc = parse(text)
-    free = FlexibleModel(desc, planar=True)
-    assert free.n_rigid == 2 and free.ndof == 23 and free.joint_switch == "free"
-    ann = FlexibleModel(desc, planar=True, joints="annotated")
-    assert ann.n_rigid == 0 and ann.ndof == 22
+    ann = FlexibleModel(desc, planar=True)
+    assert ann.n_rigid == 0 and ann.ndof == 22 and ann.joint_switch == "annotated"
     assert ann.joint_labels() == {"q1": "k=4e+03", "q2": "locked"}
     _, f_ref = planar_two_link_frequencies(Q0, 0.125, 0.125, joints=[K1, "clamped"])
     np.testing.assert_allclose(ann.frequencies(Q0), f_ref, rtol=1e-9)
+    np.testing.assert_allclose(ann.modes(Q0).freq_hz, f_ref, rtol=1e-9)
+    same = FlexibleModel(desc, planar=True, joints="annotated")  # the accepted synonym
+    np.testing.assert_array_equal(same.frequencies(Q0), ann.frequencies(Q0))
+    free = FlexibleModel(desc, planar=True, joints="free")
+    assert free.n_rigid == 2 and free.ndof == 23 and free.joint_switch == "free"
+    _, f_free = planar_two_link_frequencies(Q0, 0.125, 0.125)
+    np.testing.assert_allclose(free.frequencies(Q0), f_free, rtol=1e-9)
+    locked = FlexibleModel(desc, planar=True, joints="locked")
+    _, f_locked = planar_two_link_frequencies(Q0, 0.125, 0.125, joints=["clamped", "clamped"])
+    np.testing.assert_allclose(locked.frequencies(Q0), f_locked, rtol=1e-9)
+    # a file without annotations stays free (benchmark A)
+    plain = FlexibleModel(TWO_LINK, planar=True)
+    assert plain.n_rigid == 2 and plain.joint_switch == "free"
 
 
 def test_stiff_spring_tends_to_the_locked_joint():

@@ -11,9 +11,9 @@ from pinflex.description import parse
 from pinflex.erls import BatchAlgebra, FlexibleModel
 from pinflex.erls import design as erls_design
 from pinflex.exceptions import (
-    ConfigurationError,
     DesignVariableNotFound,
     DesignVariableOutOfBounds,
+    ImmutableModelError,
     InvalidBeamProperty,
     InvalidDescription,
     ParameterNotFound,
@@ -172,7 +172,7 @@ def test_parameter_errors_are_named():
     with pytest.raises(DesignVariableNotFound):
         FlexibleModel(parse(TUBES), values={"d9": 0.03})
     model = FlexibleModel(parse(TUBES), planar=True)
-    with pytest.raises(ConfigurationError, match="parameter"):
+    with pytest.raises(ImmutableModelError, match="with_values"):
         model.set_value("d1", 0.03)
     with pytest.raises(InvalidBeamProperty, match="inner diameter"):  # wall above D/2
         model.frequencies(Q0, [0.02, 0.012, 0.03, 0.2], check_bounds=False)

@@ -5,7 +5,7 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped with 
 
     robot = "builtin:two_link.urdf"
     planar = true
-    joints = "free"                # or "locked", "annotated" (the file's <pinflex:joint>)
+    joints = "annotated"           # the file's <pinflex:joint> (default), or "free", "locked"
     values = { m1 = 0.1 }          # parameters and point masses set before the study
 
     [trajectory]
@@ -100,7 +100,7 @@ class AssignmentConfig:
     refine: bool = False
     report_modes: list[int] = field(default_factory=lambda: [2, 3, 4])
     folder: Path = Path(".")
-    joints: str = "free"
+    joints: str = "annotated"
     values: dict | None = None
     taylor_tol: float | None = None
     points_tol: float | None = None
@@ -176,7 +176,7 @@ def config_from_data(data: dict, folder: Path, source: str = "<study>") -> Assig
     if not bad_robot:
         try:
             robot = resolve(data["robot"], folder)
-            model = _model_facts(robot, data.get("planar", False), data.get("joints", "free"),
+            model = _model_facts(robot, data.get("planar", False), data.get("joints", "annotated"),
                                  data.get("values"))
         except PinflexError as exc:
             problems.append(Problem("robot", str(exc), StudyError))
@@ -217,7 +217,7 @@ def config_from_data(data: dict, folder: Path, source: str = "<study>") -> Assig
         refine=opts.get("refine", False),
         report_modes=list(opts.get("report_modes", [2, 3, 4])),
         folder=folder,
-        joints=data.get("joints", "free"),
+        joints=data.get("joints", "annotated"),
         values=dict(data["values"]) if "values" in data else None,
     )
 

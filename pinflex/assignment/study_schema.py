@@ -76,7 +76,8 @@ STUDY: dict[str, Key] = {
                  doc="annotated URDF or overlay, relative to the study or builtin:NAME"),
     "planar": Key("bool", doc="keep in-plane elastic dofs only (default false)"),
     "joints": Key("str", choices=("free", "locked", "annotated"),
-                  doc="joint conditions: free, locked, or the file's <pinflex:joint>"),
+                  doc="joint conditions: annotated (the file's <pinflex:joint>, the default), "
+                  "or the overrides free and locked"),
     "values": Key("mapping", doc="parameters and point masses set before the study"),
     "simulation": Key("foreign_table", doc="time simulation settings (checked by "
                       "pinflex simulate)"),

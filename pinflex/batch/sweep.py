@@ -324,33 +324,40 @@ def run_assign_case(cfg, overrides: dict, chash: str, case: int) -> list[dict]:
     return [row]
 
 
-class _TrajectoryMatrices:
-    """``model.matrices`` that reuses one assembly on a fixed set of poses.
+class _SharedAssembly:
+    """A flexible model whose ``matrices`` reuses one assembly on a fixed set of poses.
 
     ``M(q, y) = M0(q) + Σ_j y_j Md_j(q)``: the pose-dependent parts (Pinocchio Jacobians,
     beam and inertia assembly) are computed once for the group's trajectory; a call on those
-    poses with one design only adds the design masses. Calls on other poses, or with one design
-    per pose, go to the model's own method. The numbers are the model's own (same assembly,
-    same sum); exact frequencies and tracked eigenpairs both go through ``matrices``.
+    poses with one design only adds the design masses. Calls on other poses, with one design
+    per pose, or on a model whose design also changes sections, materials or springs go to the
+    model's own method. The numbers are the model's own (same assembly, same sum); exact
+    frequencies and tracked eigenpairs both go through ``matrices``. Every other attribute is
+    the model's (the model itself is constant and is not changed).
     """
 
     def __init__(self, model, Q: np.ndarray):
-        self.model, self.Q = model, np.array(Q, dtype=float)
-        self.own = model.matrices
-        terms = model.pose_terms(self.Q)
+        self._model, self._Q = model, np.array(Q, dtype=float)
+        terms = model.pose_terms(self._Q)
         from pinflex.erls import BatchAlgebra
 
-        self.M0, self.Md, self.K = model.assemble(terms, BatchAlgebra(self.Q.shape[0]))
+        self._M0, self._Md, self._K = model.assemble(terms, BatchAlgebra(self._Q.shape[0]))
 
-    def __call__(self, Q, y=None, *, check_bounds: bool = True):
+    def __getattr__(self, name: str):
+        return getattr(self._model, name)
+
+    def matrices(self, Q, y=None, *, check_bounds: bool = True, data=None):
+        """The model's ``matrices``, from the shared assembly on the group's poses."""
         from pinflex.erls.model import add_design_masses
 
+        model = self._model
         Qa = np.asarray(Q, dtype=float)
-        if Qa.shape == self.Q.shape and np.array_equal(Qa, self.Q):
-            yv = self.model.check_y(y, bounds=check_bounds)
+        if (Qa.shape == self._Q.shape and np.array_equal(Qa, self._Q)
+                and not model.design_channels):
+            yv = model.check_y(y, bounds=check_bounds)
             if yv.ndim == 1:
-                return add_design_masses(self.M0, self.Md, yv), self.K
-        return self.own(Q, y, check_bounds=check_bounds)
+                return add_design_masses(self._M0, self._Md, yv), self._K
+        return model.matrices(Q, y, check_bounds=check_bounds, data=data)
 
 
 def run_assign_group(items: list) -> list[dict]:
@@ -385,8 +392,8 @@ def run_assign_group(items: list) -> list[dict]:
         for cfg, *_ in items:
             modes += [m for m in _needed_modes(cfg) if m not in modes]
         taylor = expand(model, q0, y0, order=cfg0.order, modes=modes)
-        # this worker-local model verifies every case on the same poses: assemble them once
-        model.matrices = _TrajectoryMatrices(model, Q)
+        # every case is verified on the same poses: assemble them once
+        model = _SharedAssembly(model, Q)
     except Exception:  # noqa: BLE001 - each case then reports its own error
         return [row for cfg, ov, h, case in items for row in run_assign_case(cfg, ov, h, case)]
     shared_s, shared_cpu = time.perf_counter() - t0, time.process_time() - c0

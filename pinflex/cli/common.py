@@ -26,16 +26,18 @@ def parse_values(items: Sequence[str] | None) -> dict[str, float]:
 JOINT_CHOICES = ("free", "locked", "annotated")
 
 
-def add_model_arguments(p: argparse.ArgumentParser, *, default_joints: str | None = "free",
+def add_model_arguments(p: argparse.ArgumentParser, *, default_joints: str | None = "annotated",
                         with_set: bool = True) -> None:
     """``--joints`` (and ``--set``) of every command that builds a flexible model.
 
     ``default_joints=None`` leaves the choice to the command's input (a study file).
     """
     p.add_argument("--joints", choices=JOINT_CHOICES, default=default_joints,
-                   help="joint conditions: free (no joint stiffness, paper 000), locked (every "
-                   "joint held rigidly), or annotated (the file's <pinflex:joint> springs and "
-                   "locks)" + (f" (default: {default_joints})" if default_joints else ""))
+                   help="joint conditions: annotated (the file's <pinflex:joint> springs and "
+                   "locks, other joints free; a file without them has every joint free), or "
+                   "an override: free (no joint stiffness, paper 000) or locked (every joint "
+                   "held rigidly)" + (f" (default: {default_joints})" if default_joints else
+                                      " (default: the study's, else annotated)"))
     if with_set:
         p.add_argument("--set", action="append", metavar="NAME=VALUE",
                        help="set a parameter or point mass (repeatable)")

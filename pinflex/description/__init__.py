@@ -39,8 +39,8 @@ hollow circle also takes ``wall`` (thickness [m]) instead of ``inner_diameter``.
 
 ``<pinflex:joint name="..." stiffness="..."/>`` puts a spring on a moving joint's physical
 relative motion [N m/rad revolute, N/m prismatic]; ``locked="true"`` holds it rigidly. These
-conditions apply when a model is built with ``joints="annotated"`` (the default is all
-joints free, see :class:`pinflex.erls.FlexibleModel`).
+conditions apply by default when a model is built (``joints="free"`` or ``"locked"``
+override them, see :class:`pinflex.erls.FlexibleModel`).
 
 ``<pinflex:coordinates convention="absolute"/>`` declares that the user-facing coordinates of a
 planar serial arm are absolute link angles (paper 000's convention) instead of Pinocchio's

@@ -362,7 +362,8 @@ SCHEMA: dict[str, Element] = {
             "locked": Attr("bool", doc="the joint is held fixed"),
         },
         rules=(_joint_rule,),
-        doc="joint condition: a spring or a lock (used with joints='annotated')",
+        doc="joint condition: a spring or a lock (the default; joints='free' or 'locked' "
+        "override it)",
     ),
     "coordinates": Element(
         parents=("robot", "overlay"),

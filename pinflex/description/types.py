@@ -179,8 +179,8 @@ class RobotDescription:
         flexible: Flexible links by link name.
         point_masses: Point masses in file order.
         absolute_coordinates: Whether user coordinates are absolute link angles.
-        joint_annotations: ``<pinflex:joint>`` conditions by joint name (used when a model
-            is built with ``joints="annotated"``).
+        joint_annotations: ``<pinflex:joint>`` conditions by joint name (a model's default
+            joint conditions, unless built with ``joints="free"`` or ``"locked"``).
         parameters: ``<pinflex:parameter>`` elements by name, with their current values.
         values: The parameter overrides the description was parsed with.
     """

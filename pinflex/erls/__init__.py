@@ -3,7 +3,8 @@
 :class:`FlexibleModel` (``model.py``) loads an annotated URDF and assembles ``M(q, y)`` and
 ``K(q, y)``; ``plan.py`` builds its read-only :class:`ModelPlan` (``model.plan``: links, beams,
 joints, mass carriers, attachments), ``terms.py`` holds the data types the assembly runs on,
-and ``modal.py`` solves the modal problem.
+and ``modal.py`` solves the modal problem. The model is constant once built; what a
+computation writes lives in its workspace, :class:`FlexibleData` (``workspace.py``).
 """
 
 from pinflex.erls.modal import ModalResult
@@ -19,6 +20,7 @@ from pinflex.erls.terms import (
     PointMassPlan,
     PoseTerms,
 )
+from pinflex.erls.workspace import FlexibleData
 
 __all__ = [
     "PLANAR_NODE_DOFS",
@@ -26,6 +28,7 @@ __all__ = [
     "BatchAlgebra",
     "BeamPlan",
     "DesignVariable",
+    "FlexibleData",
     "FlexibleModel",
     "JointPlan",
     "ModalResult",

@@ -20,6 +20,7 @@ coefficients in section dimensions are exact (:func:`pinflex.parametric.matrix_j
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,19 +48,49 @@ class Channel:
     unit: np.ndarray | None
 
 
-def setup(model) -> None:
-    """Find the design-dependent channels of a model (after the plan and joint set-up)."""
+@dataclass(frozen=True)
+class DesignLayout:
+    """The design-dependent terms of a model (``model.plan.design``), fixed at construction.
+
+    Attributes:
+        channels: Every design-dependent :class:`Channel` of ``M`` and ``K``.
+        links: Flexible links whose section or material depends on a design parameter.
+        mass_index: ``{point mass: design index}`` of point masses whose value is a design
+            variable (the mass itself, or the design parameter it references).
+    """
+
+    channels: tuple[Channel, ...]
+    links: tuple[str, ...]
+    mass_index: Mapping[str, int]
+
+
+def layout(model, plan, conditions) -> DesignLayout:
+    """Find the design-dependent channels of a model (after the plan and joint layout).
+
+    Args:
+        model: The model being built (its description and design variables).
+        plan: Its :class:`~pinflex.erls.terms.ModelPlan`.
+        conditions: Its :class:`~pinflex.erls.joints.JointLayout`.
+    """
+    from types import MappingProxyType
+
     design = {d.name for d in model.design if d.kind == "parameter"}
+    index = {d.name: i for i, d in enumerate(model.design)}
+    mass_index = {
+        p.name: index[p.name if p.design else str(p.mass_ref)]
+        for p in model.description.point_masses
+        if p.design or p.mass_ref is not None
+    }
     channels: list[Channel] = []
     links = []
-    for link, plan in model.plan.beams.items():
-        inputs = plan.spec.inputs
+    for link, bp in plan.beams.items():
+        inputs = bp.spec.inputs
         if inputs is None or not set(inputs.parameters()) & design:
             continue
         links.append(link)
-        spec = plan.spec
+        spec = bp.spec
         n, le = spec.elements, spec.length_m / spec.elements
-        rows = np.ix_(plan.rows, plan.rows)
+        rows = np.ix_(bp.rows, bp.rows)
         units = {
             "EA": beam.element_stiffness(le, 1.0, 0.0, 0.0, 0.0),
             "GJ": beam.element_stiffness(le, 0.0, 1.0, 0.0, 0.0),
@@ -71,22 +102,22 @@ def setup(model) -> None:
         for name, kind in CHANNELS:
             unit = beam.assemble_line(np.broadcast_to(units[name], (n, 12, 12)))[rows]
             if np.any(unit):  # planar models drop the out-of-plane channels
+                unit.setflags(write=False)
                 channels.append(Channel(kind, link, name, unit))
-    for j, k in model._spring_joints:
-        ref = model._spring_refs.get(j.name)
+    for j, k in conditions.spring_joints:
+        ref = conditions.spring_refs.get(j.name)
         if ref is not None and ref in design:
             channels.append(Channel("K", j.name, "stiffness", None))
-    model._design_channels = tuple(channels)
-    model._design_links = tuple(links)
+    return DesignLayout(tuple(channels), tuple(links), MappingProxyType(mass_index))
 
 
 def channel_values(model, get) -> list:
     """``f_c`` of every channel, with design parameters read through ``get(name)``."""
     props = {}
     out = []
-    for ch in model._design_channels:
+    for ch in model.plan.design.channels:
         if ch.name == "stiffness":
-            out.append(get(model._spring_refs[ch.owner]))
+            out.append(get(model.plan.conditions.spring_refs[ch.owner]))
             continue
         if ch.owner not in props:
             props[ch.owner] = beam_properties(model.plan.beams[ch.owner].spec.inputs, get)
@@ -96,7 +127,7 @@ def channel_values(model, get) -> list:
 
 def check_sections(model, get) -> None:
     """Raise :class:`InvalidBeamProperty` where a design makes a section or property invalid."""
-    for link in model._design_links:
+    for link in model.plan.design.links:
         inputs = model.plan.beams[link].spec.inputs
         p = beam_properties(inputs, get)
         limits = section_limits(inputs, get)
@@ -130,18 +161,18 @@ def components(model, terms, alg, which=None) -> list[np.ndarray | None]:
 
     ``which`` (booleans per channel) skips channels whose coefficient is zero (None there).
     """
-    if not model._design_channels:
+    if not model.plan.design.channels:
         return []
     twist = model.root_twists(terms, alg)
     out: list[np.ndarray | None] = []
     full: list[np.ndarray | None] = []
     cache: dict = {}
-    for n, ch in enumerate(model._design_channels):
+    for n, ch in enumerate(model.plan.design.channels):
         if which is not None and not which[n]:
             full.append(None)
             continue
         if ch.name == "stiffness":
-            j = next(jj for jj, _ in model._spring_joints if jj.name == ch.owner)
+            j = next(jj for jj, _ in model.plan.conditions.spring_joints if jj.name == ch.owner)
             gx = joint_conditions.parent_rows(model, terms, alg, twist, [j])
             g = np.concatenate([-gx, alg.const(model.coord_map[j.user_col][None, :])], axis=-1)
             full.append(_mm(alg, np.swapaxes(g, -1, -2), g))
@@ -171,7 +202,7 @@ def components(model, terms, alg, which=None) -> list[np.ndarray | None]:
 
 def add_to(model, terms, y: np.ndarray, M: np.ndarray, K: np.ndarray, n_poses: int):
     """``M``, ``K`` at designs ``y`` (ny,) or (n, ny) from the nominal ones (batched poses)."""
-    if not model._design_channels:
+    if not model.plan.design.channels:
         return M, K
     from pinflex.erls.terms import BatchAlgebra
 
@@ -190,7 +221,7 @@ def add_to(model, terms, y: np.ndarray, M: np.ndarray, K: np.ndarray, n_poses: i
     comps = components(model, terms, BatchAlgebra(n_poses), which)
     dtype = complex if np.iscomplexobj(y) else float  # complex steps pass through
     M, K = np.array(M, dtype=dtype), np.array(K, dtype=dtype)
-    for ch, fc, fc0, C in zip(model._design_channels, f, f0, comps):
+    for ch, fc, fc0, C in zip(model.plan.design.channels, f, f0, comps):
         if C is None:
             continue
         delta = np.asarray(fc - fc0)
@@ -234,13 +265,13 @@ def design_mass(model, y, *, order: int = 0):
             return float(y[names.index(name)])
 
         total = np.zeros(1)
-    for link in model._design_links:
+    for link in model.plan.design.links:
         spec = model.plan.beams[link].spec
         rhoA = beam_properties(spec.inputs, get)["rhoA"]
         total = total + (coefficients(space, rhoA) if space else float(rhoA)) * spec.length_m
     for pm in model.description.point_masses:
-        if pm.name in model._mass_design_index:
-            name = model.design[model._mass_design_index[pm.name]].name
+        if pm.name in model.plan.design.mass_index:
+            name = model.design[model.plan.design.mass_index[pm.name]].name
             v = get(name)
             total = total + (coefficients(space, v) if space else float(v))
     if not order:

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pinflex.erls.terms import twist_at
 from pinflex.exceptions import ConfigurationError, InvalidBeamProperty, JointNotFound
 
 JOINT_SWITCHES = ("free", "locked", "annotated")
@@ -72,13 +73,13 @@ def resolve(model, joints) -> tuple[JointCondition, ...]:
 
     Args:
         model: The model (its joint names and description).
-        joints: 'free' (default), 'locked', 'annotated' (the file's ``<pinflex:joint>``
-            elements; unannotated joints are free), or a mapping ``{joint: 'free' | 'locked'
-            | stiffness}`` (unnamed joints are free).
+        joints: 'annotated' or None (the default: the file's ``<pinflex:joint>``
+            elements; unannotated joints are free), 'free', 'locked', or a mapping
+            ``{joint: 'free' | 'locked' | stiffness}`` (unnamed joints are free).
     """
     names = model.joint_names
     if joints is None:
-        joints = "free"
+        joints = "annotated"
     if isinstance(joints, str):
         if joints not in JOINT_SWITCHES:
             raise ConfigurationError(
@@ -124,60 +125,126 @@ def resolve(model, joints) -> tuple[JointCondition, ...]:
     return tuple(out)
 
 
-def setup(model, joints) -> None:
-    """Lay out the modal coordinates for the joint conditions (after the elastic layout)."""
+@dataclass(frozen=True)
+class JointLayout:
+    """The modal coordinates of a model's joint conditions (``model.plan.conditions``).
+
+    Computed once when the model is built (:func:`layout`); read-only.
+
+    Attributes:
+        conditions: Per moving joint (Pinocchio's velocity order), its :class:`JointCondition`.
+        switch: The ``joints`` argument the conditions came from: 'annotated' (the file's
+            ``<pinflex:joint>`` elements, the default), 'free', 'locked' or 'mapping'.
+        kept_joints: Names of the joints that are not locked (their coordinates stay modal).
+        n_rigid: Number of free joints (rigid modes).
+        ndof: Number of modal coordinates ``nx + len(kept_joints)``.
+        rigid_cols: Modal columns of the free joints.
+        elastic_cols: Modal columns of ``x`` and of the spring-held joints.
+        spring_joints: ``(JointPlan, stiffness)`` of every spring-held joint.
+        spring_refs: ``{joint: parameter}`` of springs whose stiffness is a parameter.
+        locked_joints: ``JointPlan`` of every locked joint.
+        lock_T0: Constant part of ``T`` (nx + nv, ndof) when a joint is locked, else None.
+        lock_inv: ``C_LL⁻¹`` of the locked joints, else None.
+        lock_rows: Rows of ``T`` of the locked joints' coordinates, else None.
+        plain: Every joint free (the modal coordinates are ``[x; q]``).
+        modal_Winv: ``W⁻¹`` mapping relative to user values of the kept joints when they
+            differ (absolute coordinates with springs or locks), else None.
+    """
+
+    conditions: tuple[JointCondition, ...]
+    switch: str
+    kept_joints: tuple[str, ...]
+    n_rigid: int
+    ndof: int
+    rigid_cols: np.ndarray
+    elastic_cols: np.ndarray
+    spring_joints: tuple
+    spring_refs: Mapping[str, str]
+    locked_joints: tuple
+    lock_T0: np.ndarray | None
+    lock_inv: np.ndarray | None
+    lock_rows: np.ndarray | None
+    plain: bool
+    modal_Winv: np.ndarray | None
+
+
+def _frozen(a):
+    if a is None:
+        return None
+    a = np.array(a)
+    a.setflags(write=False)
+    return a
+
+
+def layout(model, plan, joints) -> JointLayout:
+    """The modal-coordinate layout of the joint conditions (after the elastic layout).
+
+    Args:
+        model: The model being built (its joint names, description and coordinate map).
+        plan: Its :class:`~pinflex.erls.terms.ModelPlan` (joints, beams, ``nx``).
+        joints: The ``joints`` switch or mapping (see :func:`resolve`).
+    """
+    from types import MappingProxyType
+
     conds = resolve(model, joints)
-    model.joint_conditions = conds
-    model._spring_refs = {}
-    if isinstance(joints, str) and joints == "annotated":
-        model._spring_refs = {
+    switch = "annotated" if joints is None else (joints if isinstance(joints, str)
+                                                 else "mapping")
+    spring_refs: dict[str, str] = {}
+    if switch == "annotated":
+        spring_refs = {
             a.name: a.stiffness_ref
             for a in model.description.joint_annotations.values()
             if a.stiffness_ref is not None and not a.locked
         }
-    nv, nx = model.nv, model.nx
+    nv, nx = model.nv, plan.nx
     locked = [i for i, c in enumerate(conds) if c.kind == "locked"]
     kept = [i for i, c in enumerate(conds) if c.kind != "locked"]
-    model.kept_joints = tuple(model.joint_names[i] for i in kept)
-    model.n_rigid = sum(c.kind == "free" for c in conds)
-    model.ndof = nx + len(kept)
+    ndof = nx + len(kept)
     modal_col = {j: nx + k for k, j in enumerate(kept)}
-    model._rigid_cols = np.array([modal_col[i] for i, c in enumerate(conds) if c.kind == "free"],
-                                 dtype=int)
-    model._elastic_cols = np.concatenate(
+    rigid_cols = np.array([modal_col[i] for i, c in enumerate(conds) if c.kind == "free"],
+                          dtype=int)
+    elastic_cols = np.concatenate(
         [np.arange(nx), [modal_col[i] for i, c in enumerate(conds) if c.kind == "spring"]]
     ).astype(int)
-    by_col = {j.user_col: j for j in model.plan.joints if j.user_col >= 0}
-    model._spring_joints = tuple(
+    by_col = {j.user_col: j for j in plan.joints if j.user_col >= 0}
+    spring_joints = tuple(
         (by_col[i], c.stiffness) for i, c in enumerate(conds) if c.kind == "spring"
     )
-    model._locked_joints = tuple(by_col[i] for i in locked)
-    _check_spring_scale(model)
+    locked_joints = tuple(by_col[i] for i in locked)
+    _check_spring_scale(plan, spring_joints)
     C = model.coord_map
+    T0 = inv = rows = None
     if locked:
         CLL = C[np.ix_(locked, locked)]
         CLK = C[np.ix_(locked, kept)]
         inv = np.linalg.inv(CLL)  # C is unit lower triangular: the block is invertible
-        T0 = np.zeros((nx + nv, model.ndof))
+        T0 = np.zeros((nx + nv, ndof))
         T0[:nx, :nx] = np.eye(nx)
         T0[nx + np.array(kept, dtype=int), nx + np.arange(len(kept))] = 1.0
         T0[np.ix_(nx + np.array(locked), nx + np.arange(len(kept)))] = -inv @ CLK
-        model._lock_T0 = T0
-        model._lock_inv = inv
-        model._lock_rows = nx + np.array(locked, dtype=int)
-    model._joints_plain = not model._spring_joints and not locked
+        rows = nx + np.array(locked, dtype=int)
+    plain = not spring_joints and not locked
     # Free joints carry no stiffness in *relative* joint values; with absolute user
     # coordinates a spring on one joint couples its neighbours' user coordinates. The modal
     # reduction therefore works in [x; r_kept] with r_kept = W q_kept (x = 0 in the locks).
-    model._modal_Winv = None
-    if not model._joints_plain:
+    Winv = None
+    if not plain:
         Tq = np.zeros((nv, len(kept)))
         Tq[kept, np.arange(len(kept))] = 1.0
-        if locked:
-            Tq[locked] = -model._lock_inv @ C[np.ix_(locked, kept)]
+        if inv is not None:
+            Tq[locked] = -inv @ C[np.ix_(locked, kept)]
         W = (C @ Tq)[kept]
         if not np.allclose(W, np.eye(len(kept)), rtol=0.0, atol=1e-14):
-            model._modal_Winv = np.linalg.inv(W)
+            Winv = np.linalg.inv(W)
+    return JointLayout(
+        conditions=conds, switch=switch,
+        kept_joints=tuple(model.joint_names[i] for i in kept),
+        n_rigid=sum(c.kind == "free" for c in conds), ndof=ndof,
+        rigid_cols=_frozen(rigid_cols), elastic_cols=_frozen(elastic_cols),
+        spring_joints=spring_joints, spring_refs=MappingProxyType(spring_refs),
+        locked_joints=locked_joints, lock_T0=_frozen(T0), lock_inv=_frozen(inv),
+        lock_rows=_frozen(rows), plain=plain, modal_Winv=_frozen(Winv),
+    )
 
 
 #: A spring stiffer than this multiple of the stiffest beam element's own stiffness loses
@@ -185,19 +252,19 @@ def setup(model, joints) -> None:
 STIFF_SPRING_RATIO = 1e6
 
 
-def _check_spring_scale(model) -> None:
+def _check_spring_scale(model_plan, spring_joints) -> None:
     """Warn when a spring is so stiff that the eigenvalues lose digits (use a lock)."""
-    if not model._spring_joints or not model.plan.beams:
+    if not spring_joints or not model_plan.beams:
         return
     scale = 0.0
-    for plan in model.plan.beams.values():
+    for plan in model_plan.beams.values():
         spec = plan.spec
         le = spec.length_m / spec.elements
         sec = spec.section
         rot = spec.E * max(sec.Iy, sec.Iz) / le  # bending [N m/rad]
         ax = spec.E * sec.A / le  # axial [N/m]
         scale = max(scale, rot, ax * 1e-6)
-    for j, k in model._spring_joints:
+    for j, k in spring_joints:
         ref = scale if j.kind == "revolute" else scale * 1e6
         if k > STIFF_SPRING_RATIO * ref:
             import warnings
@@ -208,7 +275,7 @@ def _check_spring_scale(model) -> None:
                 f"joint '{j.name}': stiffness {k:.3g} is {k / ref:.2g} times the stiffest beam "
                 "element's; the eigenvalues lose about that many digits of accuracy. For a "
                 "rigid joint use locked=\"true\" (joints='locked'), its exact limit",
-                PinflexWarning, stacklevel=4,
+                PinflexWarning, stacklevel=5,
             )
 
 
@@ -216,7 +283,7 @@ def parent_rows(model, terms, alg, twist, joints_) -> np.ndarray:
     """``∂(aᵀθ_parent)/∂x`` of the given joints, (b, len(joints_), nx) in the algebra."""
     rows: list[np.ndarray | None] = []
     for j in joints_:
-        tau = model._twist_at(alg, j.attach, twist[j.parent])
+        tau = twist_at(alg, j.attach, twist[j.parent])
         if tau is None:
             rows.append(None)
             continue
@@ -231,11 +298,12 @@ def parent_rows(model, terms, alg, twist, joints_) -> np.ndarray:
 
 def transform(model, terms, alg, twist):
     """``T`` (b, nx + nv, ndof) from modal coordinates to ``[x; q_all]``, or None if no lock."""
-    if not model._locked_joints:
+    lay = model.plan.conditions
+    if not lay.locked_joints:
         return None
-    gx = parent_rows(model, terms, alg, twist, model._locked_joints)
-    T = alg.const(model._lock_T0).copy()
-    T[..., model._lock_rows, : model.nx] += np.einsum("lm,...mx->...lx", model._lock_inv, gx)
+    gx = parent_rows(model, terms, alg, twist, lay.locked_joints)
+    T = alg.const(lay.lock_T0).copy()
+    T[..., lay.lock_rows, : model.nx] += np.einsum("lm,...mx->...lx", lay.lock_inv, gx)
     return T
 
 
@@ -245,11 +313,12 @@ def apply(model, terms, alg, twist, M, Mdesign, K):
     ``M``, ``K`` (b, nx + nv, nx + nv) and ``Mdesign`` (ny, b, ...) come from the assembly in
     ``[x; q_all]``; the result is over the modal coordinates ``[x; q_kept]``.
     """
-    if model._joints_plain:
+    lay = model.plan.conditions
+    if lay.plain:
         return M, Mdesign, K
-    if model._spring_joints:
-        gx = parent_rows(model, terms, alg, twist, [j for j, _ in model._spring_joints])
-        for s, (j, k) in enumerate(model._spring_joints):
+    if lay.spring_joints:
+        gx = parent_rows(model, terms, alg, twist, [j for j, _ in lay.spring_joints])
+        for s, (j, k) in enumerate(lay.spring_joints):
             g = np.concatenate(
                 [-gx[..., s : s + 1, :], alg.const(model.coord_map[j.user_col][None, :])],
                 axis=-1,

@@ -79,13 +79,14 @@ def reduced(model, M: np.ndarray, K: np.ndarray):
     The elastic block holds ``x`` and the coordinates of spring-held joints; the free joints'
     coordinates carry no stiffness and are condensed out exactly.
     """
-    if model._joints_plain:
+    lay = model.plan.conditions
+    if lay.plain:
         nx = model.nx
         Mee, Mer, Mrr = M[..., :nx, :nx], M[..., :nx, nx:], M[..., nx:, nx:]
         Kee = K[..., :nx, :nx]
     else:
         M, K = relative_joint_values(model, M, K)
-        e, r = model._elastic_cols, model._rigid_cols
+        e, r = lay.elastic_cols, lay.rigid_cols
         Mee, Mer, Mrr = M[..., e[:, None], e], M[..., e[:, None], r], M[..., r[:, None], r]
         Kee = K[..., e[:, None], e]
     if Mrr.shape[-1]:
@@ -105,7 +106,7 @@ def reduced(model, M: np.ndarray, K: np.ndarray):
 
 def relative_joint_values(model, M: np.ndarray, K: np.ndarray):
     """``M``, ``K`` with the kept joints in relative values (where free joints carry no K)."""
-    Winv = model._modal_Winv
+    Winv = model.plan.conditions.modal_Winv
     if Winv is None:
         return M, K
     P = np.eye(model.ndof)
@@ -113,7 +114,7 @@ def relative_joint_values(model, M: np.ndarray, K: np.ndarray):
     return P.T @ M @ P, P.T @ K @ P
 
 
-def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
+def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True, data=None):
     """Non-rigid eigenfrequencies [Hz] at one or many poses, ascending.
 
     Batched: all poses are assembled and solved together, by the conditioned solve of
@@ -122,8 +123,10 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
     Returns:
         (k,) for one pose or (n, k).
     """
+    data = model.workspace(data)
     if not solve.supported(model):
-        return _frequencies_nodal(model, Q, y, n_modes=n_modes, check_bounds=check_bounds)
+        return _frequencies_nodal(model, Q, y, n_modes=n_modes, check_bounds=check_bounds,
+                                  data=data)
     y = model.check_y(y, bounds=check_bounds)  # Q: checked by FlexibleModel.frequencies
     single = Q.ndim == 1
     Qb = Q[None] if single else Q
@@ -132,10 +135,10 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
             f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
         )
     _check_n_modes(n_modes)
-    layout = solve.one_pose_layout(model) if single and y.ndim == 1 else None
+    layout = solve.one_pose_layout(model, data) if single and y.ndim == 1 else None
     if layout is not None:  # one pose: one product S^T W S instead of the block assembly
-        terms = model.pose_terms_one(Q)
-        twist = solve.root_twists_one(model, solve.solve_plan(model), terms)
+        terms = model.pose_terms_one(Q, data=data)
+        twist = solve.root_twists_one(model, solve.solve_plan(model, data), terms, data)
         M = solve.mass_one(model, layout, terms, twist, y)[0]
 
         def pencil1():
@@ -144,8 +147,8 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
 
         lam = solve.eigvals_one(model, M, n_modes, pencil1)
         return np.sqrt(lam) / (2.0 * np.pi)
-    terms = model.pose_terms(Qb)
-    M = solve.mass(model, terms, y, Qb.shape[0])
+    terms = model.pose_terms(Qb, data=data)
+    M = solve.mass(model, terms, y, Qb.shape[0], data=data)
 
     def pencil(i):  # nodal-coordinate pair of pose i, for high modes of extreme spectra
         Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)
@@ -170,13 +173,14 @@ def _check_n_modes(n_modes) -> None:
         raise ConfigurationError(f"n_modes = {n_modes!r}: give a positive whole number of modes")
 
 
-def _frequencies_nodal(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
+def _frequencies_nodal(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True,
+                       data=None):
     """Frequencies from the nodal-coordinate pencil (models the conditioned solve lacks).
 
     Returns:
         (k,) for one pose or (n, k).
     """
-    M, K = model.matrices(Q, y, check_bounds=check_bounds)
+    M, K = model.matrices(Q, y, check_bounds=check_bounds, data=data)
     lam = model.eigvals_from(M, K)
     if n_modes is not None:
         lam = lam[..., :n_modes]
@@ -218,27 +222,29 @@ def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
     return lam
 
 
-def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) -> ModalResult:
+def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
+          data=None) -> ModalResult:
     """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
 
     Solved like :func:`frequencies` (the conditioned solve of :mod:`pinflex.erls.solve` where
     it covers the model); the shapes are returned over the nodal coordinates ``[x; q]``.
     """
+    data = model.workspace(data)
     if not solve.supported(model):
-        return _modes_nodal(model, q, y, n_modes=n_modes, check_bounds=check_bounds)
+        return _modes_nodal(model, q, y, n_modes=n_modes, check_bounds=check_bounds, data=data)
     q = model.check_q(q)
     if q.ndim != 1:
         raise ConfigurationError("modes() takes one pose; use frequencies() for many")
     y = model.check_y(y, bounds=check_bounds)
     _check_n_modes(n_modes)
-    terms, placements = model.pose_terms_and_placements(q)
-    plan = solve.solve_plan(model)
-    twist = solve.root_twists_one(model, plan, terms)
-    layout = solve.one_pose_layout(model) if y.ndim == 1 else None
+    terms, placements = model.pose_terms_and_placements(q, data=data)
+    plan = solve.solve_plan(model, data)
+    twist = solve.root_twists_one(model, plan, terms, data)
+    layout = solve.one_pose_layout(model, data) if y.ndim == 1 else None
     if layout is not None:
         M, S = solve.mass_one(model, layout, terms, twist, y)
     else:
-        M = solve.mass(model, terms, y, 1)[0]
+        M = solve.mass(model, terms, y, 1, data=data)[0]
 
     def pencil():
         Mx, Kx = model.matrices_from_terms(terms, y, 1)
@@ -256,14 +262,14 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) ->
             q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
             node_positions=positions, node_motion=motion, node_elastic=elastic,
         )
-    shapes = np.concatenate([solve.to_nodal(model, twist, sw), sx], axis=1)
+    shapes = np.concatenate([solve.to_nodal(model, twist, sw, data), sx], axis=1)
     nx = model.nx
     k = lam.size
     # sign: largest elastic component positive
     phix = shapes[:nx]
     idx = np.argmax(np.abs(phix), axis=0)
     shapes *= np.where(phix[idx, np.arange(k)] < 0, -1.0, 1.0)[None, :]
-    positions, motion, elastic = node_fields(model, q, shapes, terms)
+    positions, motion, elastic = node_fields(model, q, shapes, terms, data)
     return ModalResult(
         q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
@@ -339,7 +345,8 @@ def _solver_fields(model, plan, twist, terms, placements, sw: np.ndarray):
     return shapes, positions, motion, elastic
 
 
-def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=True) -> ModalResult:
+def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
+                 data=None) -> ModalResult:
     """Modes from the nodal-coordinate pencil (models the conditioned solve lacks)."""
     import scipy.linalg
 
@@ -347,7 +354,7 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     if q.ndim != 1:
         raise ConfigurationError("modes() takes one pose; use frequencies() for many")
     y = model.check_y(y, bounds=check_bounds)
-    terms = model.pose_terms(q[None])
+    terms = model.pose_terms(q[None], data=data)
     M, K = model.matrices_from_terms(terms, y, 1)
     M, K = M[0], K[0]
     Mred, Kxx = reduced(model, M, K)
@@ -355,35 +362,37 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     k = ne if n_modes is None else min(int(n_modes), ne)
     lam, phie = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[0, k - 1] if k else None)
     shapes = np.zeros((model.ndof, k))
-    e, r = model._elastic_cols, model._rigid_cols
+    lay = model.plan.conditions
+    e, r = lay.elastic_cols, lay.rigid_cols
     shapes[e] = phie
     if r.size:
-        Mi = M if model._joints_plain else relative_joint_values(model, M, K)[0]
+        Mi = M if lay.plain else relative_joint_values(model, M, K)[0]
         shapes[r] = -np.linalg.solve(Mi[np.ix_(r, r)], Mi[np.ix_(r, e)] @ phie)
-    if model._modal_Winv is not None:
-        shapes[model.nx:] = model._modal_Winv @ shapes[model.nx:]
+    if lay.modal_Winv is not None:
+        shapes[model.nx:] = lay.modal_Winv @ shapes[model.nx:]
     # sign: largest elastic component positive
     idx = np.argmax(np.abs(phie), axis=0)
     shapes *= np.sign(phie[idx, np.arange(k)])[None, :]
-    positions, motion, elastic = node_fields(model, q, shapes, terms)
+    positions, motion, elastic = node_fields(model, q, shapes, terms, data)
     return ModalResult(
         q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
     )
 
 
-def node_fields(model, q: np.ndarray, shapes: np.ndarray, terms=None):
+def node_fields(model, q: np.ndarray, shapes: np.ndarray, terms=None, data=None):
     """World node positions, total and elastic nodal motion of mode shapes at pose q.
 
-    ``terms`` are the pose terms of ``q`` when the caller already has them.
+    ``terms`` are the pose terms of ``q`` when the caller already has them; ``data`` the
+    workspace (default: this thread's).
     """
     if terms is None:
-        terms = model.pose_terms(q[None])
+        terms = model.pose_terms(q[None], data=data)
     twist = model.root_twists(terms, BatchAlgebra(1))
     T = joints.transform(model, terms, BatchAlgebra(1), twist)
     if T is not None:  # locked joints: back to [x; q_all]
         shapes = T[0] @ shapes
-    placements = model.node_placements(q)
+    placements = model.node_placements(q, data=data)
     positions, motion, elastic = {}, {}, {}
     nx = model.nx
     for link, plan in model.plan.beams.items():

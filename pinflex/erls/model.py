@@ -29,6 +29,7 @@ pair and no spurious near-zero ones; the ``nv`` rigid modes are counted, not com
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import NamedTuple
@@ -42,18 +43,20 @@ from pinflex.erls import joints as joint_conditions
 from pinflex.erls import modal
 from pinflex.erls.plan import build_plan, coordinate_map
 from pinflex.erls.terms import (
-    Attachment,
     BatchAlgebra,
     DesignVariable,
     ModelPlan,
     PoseTerms,
     offset_block,
+    twist_at,
     zeros_like,
 )
+from pinflex.erls.workspace import FlexibleData, ThreadWorkspaces, check_data
 from pinflex.exceptions import (
     ConfigurationError,
     DesignVariableNotFound,
     DesignVariableOutOfBounds,
+    ImmutableModelError,
     InvalidDescription,
     NoFlexibleLink,
 )
@@ -83,6 +86,62 @@ def add_design_masses(M0: np.ndarray, Md: np.ndarray, y: np.ndarray) -> np.ndarr
     return M0 + np.einsum("nj,jnab->nab", y, Md)
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a = np.array(a)
+    a.setflags(write=False)
+    return a
+
+
+def _checked_mass(description: RobotDescription, design: tuple, name: str, value) -> float:
+    """A point mass's new value [kg], checked (one finite number, within bounds, >= 0)."""
+    arr = require_array(value, f"the value of '{name}'")
+    if isinstance(value, bool) or arr.shape != ():
+        raise ConfigurationError(f"the value of '{name}' must be one number [kg]")
+    v = float(arr)
+    for d in design:
+        if d.name == name and not d.lower <= v <= d.upper:
+            raise DesignVariableOutOfBounds(name, v, d.lower, d.upper)
+    if v < 0.0:
+        raise DesignVariableOutOfBounds(name, v, 0.0, np.inf)
+    return v
+
+
+def _rodrigues_constants(model) -> tuple:
+    """Constants of :meth:`FlexibleModel.pose_terms`.
+
+    The revolute joints' names, user columns and ``R_o``, ``R_o K``, ``R_o K^2`` (K the axis'
+    cross-product matrix) stacked (nj, 3, 3), and whether the coordinate map is the identity.
+    """
+    rev = [j for j in model.plan.joints if j.kind == "revolute"]
+    K = [skew(j.axis) for j in rev]
+    A0 = np.array([j.R_o for j in rev]).reshape(-1, 3, 3)
+    A1 = np.array([j.R_o @ k for j, k in zip(rev, K)]).reshape(-1, 3, 3)
+    A2 = np.array([j.R_o @ k @ k for j, k in zip(rev, K)]).reshape(-1, 3, 3)
+    for a in (A0, A1, A2):
+        a.setflags(write=False)
+    plain = bool(np.array_equal(model.coord_map, np.eye(model.nv)))
+    return (tuple(j.name for j in rev), _read_only(np.array([j.user_col for j in rev], dtype=int)),
+            A0, A1, A2, plain)
+
+
+def _pin_order(pmodel) -> np.ndarray | None:
+    """``idx_v`` per configuration slot when it is not the identity (nq = nv), else None."""
+    order = np.zeros(pmodel.nq, dtype=int)
+    for j in range(1, pmodel.njoints):
+        jm = pmodel.joints[j]
+        order[jm.idx_q : jm.idx_q + jm.nq] = np.arange(jm.idx_v, jm.idx_v + jm.nv)
+    return None if np.array_equal(order, np.arange(order.size)) else _read_only(order)
+
+
+def _placement_constants(plan: ModelPlan) -> tuple:
+    """Per beam: its link, nodes with a column of ones (N+1, 4) and the beam axes (3, 3)."""
+    rows = []
+    for link, bp in plan.beams.items():
+        nodes_h = _read_only(np.hstack([bp.nodes, np.ones((bp.nodes.shape[0], 1))]))
+        rows.append((link, nodes_h, bp.spec.rotation))
+    return tuple(rows)
+
+
 class FlexibleModel:
     """A URDF arm whose annotated links are finite-element beams (ERLS).
 
@@ -107,30 +166,21 @@ class FlexibleModel:
         values: Values of parameters and point masses ``{name: value}`` (checked against
             their bounds); unknown names raise :class:`DesignVariableNotFound`.
         coordinates: 'relative' or 'absolute' to override the description's convention.
-        joints: Joint conditions: 'free' (default, paper 000: no joint stiffness, one rigid
-            mode per joint), 'locked' (every joint held rigidly), 'annotated' (the file's
-            ``<pinflex:joint>`` springs and locks, other joints free), or a mapping
-            ``{joint: 'free' | 'locked' | stiffness}``. See :mod:`pinflex.erls.joints`:
-            matrices are over the modal coordinates ``[x; q_kept]`` (locked joints'
-            coordinates eliminated) and ``n_rigid`` counts the free joints.
-    """
+        joints: Joint conditions: by default (None or 'annotated') the file's
+            ``<pinflex:joint>`` springs and locks, other joints free (a file without them,
+            as paper 000's benchmark, has every joint free); 'free' (no joint stiffness, one
+            rigid mode per joint) or 'locked' (every joint held rigidly) override them, as
+            does a mapping ``{joint: 'free' | 'locked' | stiffness}``. See
+            :mod:`pinflex.erls.joints`: matrices are over the modal coordinates
+            ``[x; q_kept]`` (locked joints' coordinates eliminated) and ``n_rigid`` counts the
+            free joints.
 
-    # set by the joint-condition layout (pinflex.erls.joints.setup)
-    joint_conditions: tuple
-    kept_joints: tuple[str, ...]
-    n_rigid: int
-    _rigid_cols: np.ndarray
-    _elastic_cols: np.ndarray
-    _spring_joints: tuple
-    _locked_joints: tuple
-    _lock_T0: np.ndarray
-    _lock_inv: np.ndarray
-    _lock_rows: np.ndarray
-    _joints_plain: bool
-    _modal_Winv: np.ndarray | None
-    # set by the design-channel layout (pinflex.erls.design.setup)
-    _design_channels: tuple
-    _design_links: tuple[str, ...]
+    The model is constant once built (as ``pinocchio.Model``): attributes cannot be set and its
+    arrays are read-only. Other values give another model, :meth:`with_values`. What a
+    computation writes lives in a workspace (:class:`~pinflex.erls.workspace.FlexibleData`, as
+    ``pinocchio.Data``): every computing method takes ``data=None``, by default the calling
+    thread's own workspace (:meth:`workspace`), so threads may share one model.
+    """
 
     def __init__(
         self,
@@ -140,6 +190,7 @@ class FlexibleModel:
         values: dict[str, float] | None = None,
         coordinates: str | None = None,
         joints=None,
+        _reuse: FlexibleModel | None = None,
     ):
         """Build the ERLS model of a description (arguments as in the class docstring).
 
@@ -148,8 +199,10 @@ class FlexibleModel:
             planar: Keep only in-plane elastic dofs (a bool).
             values: ``{name: value}`` of parameters [their units] and point masses [kg].
             coordinates: ``'relative'``, ``'absolute'`` or None (the description's choice).
-            joints: Joint conditions: ``'free'`` (None), ``'locked'``, ``'annotated'`` or
-                ``{joint: 'free' | 'locked' | stiffness}``.
+            joints: Joint conditions: None or ``'annotated'`` (the file's), ``'free'``,
+                ``'locked'`` or ``{joint: 'free' | 'locked' | stiffness}``.
+            _reuse: A model of the same description and options whose Pinocchio model and
+                plan this one shares (internal, :meth:`with_values`).
 
         Raises:
             DesignVariableNotFound: A name in ``values`` is neither a parameter nor a point
@@ -169,15 +222,20 @@ class FlexibleModel:
         params = {k: v for k, v in values.items() if k in description.parameters}
         if params:
             description = description.with_values(params)
+            _reuse = None
         self.description = description
         if not isinstance(planar, bool | np.bool_):
             raise ConfigurationError(f"planar must be True or False, got {planar!r}")
         self.planar = bool(planar)
-        try:
-            self.model = pin.buildModelFromXML(description.urdf_xml)
-        except Exception as exc:  # Pinocchio raises plain RuntimeError/ValueError
-            raise InvalidDescription(f"Pinocchio could not load the URDF: {exc}") from exc
-        self.data = self.model.createData()
+        #: Pinocchio's model of the URDF (constant; shared by models of the same URDF).
+        self.model: pin.Model
+        if _reuse is not None:
+            self.model = _reuse.model  # the same URDF: Pinocchio's model is shared, unchanged
+        else:
+            try:
+                self.model = pin.buildModelFromXML(description.urdf_xml)
+            except Exception as exc:  # Pinocchio raises plain RuntimeError/ValueError
+                raise InvalidDescription(f"Pinocchio could not load the URDF: {exc}") from exc
         self.joint_names = tuple(self.model.names[1:])
         self.nv = self.model.nv
         if self.nv != len(self.joint_names):
@@ -190,9 +248,9 @@ class FlexibleModel:
                 f"coordinates='{coordinates}': expected 'relative' or 'absolute'"
             )
         self.coordinates = "absolute" if absolute else "relative"
-        self.coord_map = coordinate_map(self, absolute)
-        self._pm_values = {p.name: p.mass for p in description.point_masses}
-        self.design = tuple(
+        self.coord_map = _read_only(coordinate_map(self, absolute))
+        pm_values = {p.name: p.mass for p in description.point_masses}
+        design = tuple(
             DesignVariable(p.name, p.lower, p.upper, p.mass)
             for p in description.point_masses
             if p.design
@@ -201,23 +259,129 @@ class FlexibleModel:
             for p in description.parameters.values()
             if p.design
         )
-        index = {d.name: i for i, d in enumerate(self.design)}
-        self._mass_design_index = {
-            p.name: index[p.name if p.design else str(p.mass_ref)]
-            for p in description.point_masses
-            if p.design or p.mass_ref is not None
-        }
+        masses = {}
         for name, value in values.items():
             if name not in params:
-                self.set_value(name, value)
-        #: The fixed, read-only layout (links, beams, joints, carriers; see ModelPlan).
-        self.plan: ModelPlan = build_plan(self)
-        self.nx = self.plan.nx
-        self.ndof = self.nx + self.nv
-        self.x_names = self.plan.x_names
-        joint_conditions.setup(self, joints)
-        design_channels.setup(self)
+                masses[name] = value = _checked_mass(description, design, name, value)
+                pm_values[name] = value
+                design = tuple(DesignVariable(name, d.lower, d.upper, value)
+                               if d.name == name else d for d in design)
+        self.design = design
+        self._pm_values = MappingProxyType(pm_values)
+        self._masses_set = MappingProxyType(masses)
+        self._joints_arg = MappingProxyType(dict(joints)) if isinstance(joints, Mapping) else (
+            joints)
+        if _reuse is not None:
+            plan = _reuse.plan
+        else:
+            plan = build_plan(self)
+            conditions = joint_conditions.layout(self, plan, joints)
+            plan = replace(plan, conditions=conditions,
+                           design=design_channels.layout(self, plan, conditions))
+        #: The fixed, read-only layout (links, beams, joints, carriers, joint conditions and
+        #: design channels; see ModelPlan).
+        self.plan: ModelPlan = plan
+        self.nx = plan.nx
+        self.ndof = plan.conditions.ndof
+        self.x_names = plan.x_names
+        self._mass_design_index = plan.design.mass_index
+        # constants of the kinematics passes (computed here: the model never changes)
+        self._rodrigues = _rodrigues_constants(self)
+        self._revolute_ids = tuple((name, self.model.getJointId(name))
+                                   for name in self._rodrigues[0])
+        self._pin_order = _pin_order(self.model)
+        self._placement_constants = _placement_constants(plan)
+        self._workspaces = ThreadWorkspaces()
         check_modal(self.ndof, 1, f"the model of robot '{description.name}'")
+        self.__dict__["_built"] = True
+
+    def __setattr__(self, name: str, value) -> None:
+        """Refused once the model is built: other values give another model."""
+        if self.__dict__.get("_built"):
+            raise ImmutableModelError(
+                f"FlexibleModel is constant once built: cannot set '{name}'; build another "
+                "model, e.g. model.with_values(NAME=VALUE) for new parameter or mass values"
+            )
+        object.__setattr__(self, name, value)
+
+    def __delattr__(self, name: str) -> None:
+        """Refused: the model is constant."""
+        raise ImmutableModelError(f"FlexibleModel is constant once built: cannot delete '{name}'")
+
+    def __getstate__(self) -> dict:
+        """State for pickling (the per-thread workspaces stay behind)."""
+        state = dict(self.__dict__)
+        del state["_workspaces"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        """Restore a pickled model, with fresh per-thread workspaces."""
+        self.__dict__.update(state)
+        self.__dict__["_workspaces"] = ThreadWorkspaces()
+
+    # ------------------------------------------------------------------ values and workspaces
+    def with_values(self, values: Mapping[str, float] | None = None, /,
+                    **kwargs: float) -> FlexibleModel:
+        """A new model with some parameter or point-mass values changed; this one is unchanged.
+
+        Values given before (``values=`` when this model was built, or an earlier
+        ``with_values``) are kept unless overridden. When only point masses change, the new
+        model shares this one's Pinocchio model and plan (both constant).
+
+        Args:
+            values: ``{name: value}`` of parameters [their units] and point masses [kg].
+            **kwargs: The same as keywords, ``model.with_values(tip=1.0)``.
+
+        Returns:
+            A new :class:`FlexibleModel` (its own workspaces).
+
+        Raises:
+            DesignVariableNotFound: A name is neither a parameter nor a point mass.
+            DesignVariableOutOfBounds: A value leaves its bounds (or a mass is negative).
+            ConfigurationError: A value is not one finite number.
+        """
+        new = {**dict(values or {}), **kwargs}
+        known = set(self.description.parameters) | set(self._pm_values)
+        for name in new:
+            if name not in known:
+                raise DesignVariableNotFound(name, sorted(known))
+        params = {k: v for k, v in new.items() if k in self.description.parameters}
+        masses = {**self._masses_set, **{k: v for k, v in new.items() if k not in params}}
+        description = self.description.with_values(params) if params else self.description
+        return FlexibleModel(description, planar=self.planar, values=masses,
+                             coordinates=self.coordinates, joints=self._joints_arg,
+                             _reuse=None if params else self)
+
+    def set_value(self, name: str, value: float) -> None:
+        """Removed: the model is constant; use ``model = model.with_values(name=value)``.
+
+        Raises:
+            ImmutableModelError: Always.
+        """
+        raise ImmutableModelError(
+            f"FlexibleModel is constant once built: set_value('{name}', ...) is gone; use "
+            f"model = model.with_values({{'{name}': {value!r}}}), which returns a new model"
+        )
+
+    def create_data(self) -> FlexibleData:
+        """A new workspace of this model (for ``data=``), as ``pinocchio.Model.createData``."""
+        return FlexibleData(self)
+
+    def workspace(self, data: FlexibleData | None = None) -> FlexibleData:
+        """``data`` checked, or the calling thread's own workspace of this model.
+
+        Args:
+            data: A workspace from :meth:`create_data`, or None.
+
+        Returns:
+            ``data``, or this thread's default workspace (created on first use).
+
+        Raises:
+            ConfigurationError: ``data`` belongs to another model.
+        """
+        if data is None:
+            return self._workspaces.get(self)
+        return check_data(self, data)
 
     @classmethod
     def from_pinocchio(
@@ -241,7 +405,8 @@ class FlexibleModel:
                 it carries.
             masses: ``{name: pinflex.Mass}`` point masses [kg, m].
             joints: Joint conditions of the modal model, as for the constructor
-                (``"free"``, ``"locked"``, ``"annotated"`` or ``{joint: ...}``); default free.
+                (``"free"``, ``"locked"``, ``"annotated"`` or ``{joint: ...}``); by default
+                the annotations, and Python specifications carry none: every joint free.
             **kwargs: ``planar``, ``values``, ``coordinates`` as for the constructor.
 
         Example::
@@ -279,46 +444,6 @@ class FlexibleModel:
 
         return effective_model(self, y, point_masses=point_masses)
 
-    # ------------------------------------------------------------------ set-up
-    def set_value(self, name: str, value: float) -> None:
-        """Set the nominal value of a point mass [kg].
-
-        Parameters are set when the model is built (``FlexibleModel(..., values={...})``).
-
-        Args:
-            name: Name of a point mass of the description.
-            value: Its new nominal mass [kg], one finite number; a design mass must stay
-                within its bounds, any mass must be >= 0.
-
-        Raises:
-            ConfigurationError: ``name`` is a parameter, or ``value`` is not one finite number.
-            DesignVariableNotFound: No point mass has this name.
-            DesignVariableOutOfBounds: ``value`` is outside the design bounds or negative.
-        """
-        if name in self.description.parameters:
-            raise ConfigurationError(
-                f"'{name}' is a parameter: set it when building the model, "
-                f"FlexibleModel(..., values={{'{name}': ...}}) or --set {name}=VALUE"
-            )
-        if name not in self._pm_values:
-            raise DesignVariableNotFound(name, self._pm_values)
-        arr = require_array(value, f"the value of '{name}'")
-        if isinstance(value, bool) or arr.shape != ():
-            raise ConfigurationError(f"the value of '{name}' must be one number [kg]")
-        value = float(arr)
-        for i, d in enumerate(self.design):
-            if d.name == name:
-                if not d.lower <= value <= d.upper:
-                    raise DesignVariableOutOfBounds(name, value, d.lower, d.upper)
-                self.design = (
-                    self.design[:i]
-                    + (DesignVariable(name, d.lower, d.upper, value),)
-                    + self.design[i + 1 :]
-                )
-        if value < 0.0:
-            raise DesignVariableOutOfBounds(name, value, 0.0, np.inf)
-        self._pm_values[name] = value
-
     @property
     def point_mass_values(self) -> Mapping[str, float]:
         """Current values of every point mass ``{name: kg}`` (read-only view)."""
@@ -327,32 +452,34 @@ class FlexibleModel:
     @property
     def design_channels(self) -> tuple:
         """Design-dependent mass and stiffness channels (:mod:`pinflex.erls.design`), read-only."""
-        return self._design_channels
+        return self.plan.design.channels
 
     @property
     def design_links(self) -> tuple[str, ...]:
         """Flexible links whose section or material depends on design parameters."""
-        return self._design_links
+        return self.plan.design.links
 
     @property
     def plane_normal(self) -> np.ndarray | None:
         """World normal (3,) of the plane of a planar model, None otherwise."""
         return self.plan.plane_normal
 
-    def node_placements(self, q) -> dict[str, NodePlacement]:
+    def node_placements(self, q, *, data: FlexibleData | None = None
+                        ) -> dict[str, NodePlacement]:
         """World placement of every beam's nodes at one pose.
 
         Args:
             q: Joint coordinates (nv,) in the user convention [rad or m].
+            data: Workspace (default: this thread's).
 
         Returns:
             ``{link: NodePlacement}`` for every flexible link, in plan order: node positions
             (N+1, 3) [m] and the rotation (3, 3) of the beam axes, both in the world frame.
         """
         q = self.check_q(q)
-        data = self.model.createData()
-        pin.framesForwardKinematics(self.model, data, self.pin_configuration(q))
-        return self._placements(data)
+        pdata = self.workspace(data).pin
+        pin.framesForwardKinematics(self.model, pdata, self.pin_configuration(q))
+        return self._placements(pdata)
 
     def _placements(self, data) -> dict[str, NodePlacement]:
         """Node placements from Pinocchio ``data`` whose frame placements are up to date."""
@@ -363,22 +490,8 @@ class FlexibleModel:
             out[link] = NodePlacement(nodes_h @ H.T, H[:, :3] @ axes)
         return out
 
-    @property
-    def _placement_constants(self) -> tuple:
-        """Per beam: its link, nodes with a column of ones (N+1, 4) and the beam axes (3, 3)."""
-        cached = self.__dict__.get("_placement_cache")
-        if cached is None:
-            rows = []
-            for link, bp in self.plan.beams.items():
-                nodes_h = np.hstack([bp.nodes, np.ones((bp.nodes.shape[0], 1))])
-                nodes_h.setflags(write=False)
-                rows.append((link, nodes_h, bp.spec.rotation))
-            cached = tuple(rows)
-            self.__dict__["_placement_cache"] = cached
-        return cached
-
     def pose_terms_and_placements(
-        self, q: np.ndarray
+        self, q: np.ndarray, *, data: FlexibleData | None = None
     ) -> tuple[PoseTerms, dict[str, NodePlacement]]:
         """:meth:`pose_terms` and :meth:`node_placements` of one checked pose (nv,).
 
@@ -388,45 +501,48 @@ class FlexibleModel:
         Args:
             q: Joint coordinates (nv,) in the user convention [rad or m], already checked by
                 :meth:`check_q` (not validated again).
+            data: Workspace (default: this thread's).
 
         Returns:
             ``(terms, placements)``: :class:`PoseTerms` with leading axis 1 and
             ``{link: NodePlacement}`` as :meth:`node_placements`.
         """
+        ws = self.workspace(data)
         if not self.nv:
-            return self.pose_terms(q[None]), self.node_placements(q)
-        terms = self.pose_terms_one(q)
-        pin.updateFramePlacements(self.model, self.data)
-        return terms, self._placements(self.data)
+            return self.pose_terms(q[None], data=ws), self.node_placements(q, data=ws)
+        terms = self.pose_terms_one(q, data=ws)
+        pin.updateFramePlacements(self.model, ws.pin)
+        return terms, self._placements(ws.pin)
 
-    def pose_terms_one(self, q: np.ndarray) -> PoseTerms:
+    def pose_terms_one(self, q: np.ndarray, *, data: FlexibleData | None = None) -> PoseTerms:
         """:meth:`pose_terms` of one checked pose (nv,), leading axis 1, without the batch loop.
 
-        Leaves ``self.data`` at this pose (joint placements and Jacobians).
+        Leaves the workspace's Pinocchio data at this pose (joint placements and Jacobians).
 
         Args:
             q: Joint coordinates (nv,) in the user convention [rad or m], already checked.
+            data: Workspace (default: this thread's).
 
         Returns:
             :class:`PoseTerms`: ``jac`` ``{link: (1, 6, nv)}``, ``rot`` ``{joint: (1, 3, 3)}``,
             ``slide`` ``{prismatic joint: (1, 3)}`` [m].
         """
         if not self.nv:
-            return self.pose_terms(q[None])
-        model, data = self.model, self.data
+            return self.pose_terms(q[None], data=data)
+        model, pdata = self.model, self.workspace(data).pin
         cmap = self.coord_map
         qrel = np.dot(cmap, q)
-        pin.computeJointJacobians(model, data, self._configuration_of(qrel))
+        pin.computeJointJacobians(model, pdata, self._configuration_of(qrel))
         names, cols, A0, A1, A2, plain = self._rodrigues
         jac = {}
         ids, local, dot = self.plan.frame_ids, pin.LOCAL, np.dot
         for link in self.plan.carriers:
-            J = pin.getFrameJacobian(model, data, ids[link], local)
+            J = pin.getFrameJacobian(model, pdata, ids[link], local)
             jac[link] = (J if plain else dot(J.reshape(6, -1), cmap)).reshape(1, 6, -1)
         rot, slide = {}, {}
         # a revolute joint's rotation R_o Rot(axis, θ): Pinocchio's parent-to-joint placement
         # of this pass (pose_terms: the same by Rodrigues' formula, batched)
-        liMi = data.liMi
+        liMi = pdata.liMi
         for name, jid in self._revolute_ids:
             rot[name] = liMi[jid].rotation[None]
         for j in self.plan.joints:
@@ -612,43 +728,29 @@ class FlexibleModel:
                 out[jm.idx_q] = v
         return out
 
-    @property
-    def _pin_order(self) -> np.ndarray | None:
-        """``idx_v`` per configuration slot when it is not the identity (nq = nv), else None."""
-        cached = self.__dict__.get("_pin_order_cache", False)
-        if cached is False:
-            order = np.zeros(self.model.nq, dtype=int)
-            for j in range(1, self.model.njoints):
-                jm = self.model.joints[j]
-                order[jm.idx_q : jm.idx_q + jm.nq] = np.arange(jm.idx_v, jm.idx_v + jm.nv)
-            cached = None if np.array_equal(order, np.arange(order.size)) else order
-            if cached is not None:
-                cached.setflags(write=False)
-            self.__dict__["_pin_order_cache"] = cached
-        return cached
-
     # ------------------------------------------------------------------ assembly
-    def pose_terms(self, Q: np.ndarray) -> PoseTerms:
+    def pose_terms(self, Q: np.ndarray, *, data: FlexibleData | None = None) -> PoseTerms:
         """Pinocchio Jacobians and joint rotations at poses Q (n, nv).
 
         Args:
             Q: Checked joint coordinates (n, nv) in the user convention [rad or m]; not
                 validated (use :meth:`check_q` first).
+            data: Workspace (default: this thread's).
 
         Returns:
             :class:`PoseTerms`: ``jac`` ``{carrier link: (n, 6, nv)}`` LOCAL frame Jacobians
             over the user coordinates, ``rot`` ``{revolute joint: (n, 3, 3)}`` child-in-parent
             rotations, ``slide`` ``{prismatic joint: (n, 3)}`` child origin offsets [m].
         """
-        model, data = self.model, self.data
+        model, pdata = self.model, self.workspace(data).pin
         n = Q.shape[0]
         jac = {link: np.zeros((n, 6, self.nv)) for link in self.plan.carriers}
         fids = [(link, self.plan.frame_ids[link]) for link in self.plan.carriers]
         for i in range(n if self.nv else 0):
             qp = self.pin_configuration(Q[i])
-            pin.computeJointJacobians(model, data, qp)
+            pin.computeJointJacobians(model, pdata, qp)
             for link, fid in fids:
-                jac[link][i] = pin.getFrameJacobian(model, data, fid, pin.LOCAL).reshape(6, -1)
+                jac[link][i] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL).reshape(6, -1)
         names, cols, A0, A1, A2, plain = self._rodrigues
         if not plain:
             for link in jac:
@@ -664,38 +766,6 @@ class FlexibleModel:
             if j.kind == "prismatic":
                 slide[j.name] = (j.R_o @ j.axis)[None, :] * qrel[:, j.user_col, None]
         return PoseTerms(jac, rot, slide)
-
-    @property
-    def _revolute_ids(self) -> tuple:
-        """``(name, Pinocchio joint id)`` of the revolute joints, in :attr:`_rodrigues` order."""
-        cached = self.__dict__.get("_revolute_ids_cache")
-        if cached is None:
-            cached = tuple((name, self.model.getJointId(name)) for name in self._rodrigues[0])
-            self.__dict__["_revolute_ids_cache"] = cached
-        return cached
-
-    @property
-    def _rodrigues(self) -> tuple:
-        """Constants of :meth:`pose_terms`, computed once.
-
-        The revolute joints' names, user columns and ``R_o``, ``R_o K``, ``R_o K^2`` (K the
-        axis' cross-product matrix) stacked (nj, 3, 3), and whether the coordinate map is the
-        identity.
-        """
-        cached = self.__dict__.get("_rodrigues_cache")
-        if cached is None:
-            rev = [j for j in self.plan.joints if j.kind == "revolute"]
-            K = [skew(j.axis) for j in rev]
-            A0 = np.array([j.R_o for j in rev]).reshape(-1, 3, 3)
-            A1 = np.array([j.R_o @ k for j, k in zip(rev, K)]).reshape(-1, 3, 3)
-            A2 = np.array([j.R_o @ k @ k for j, k in zip(rev, K)]).reshape(-1, 3, 3)
-            for a in (A0, A1, A2):
-                a.setflags(write=False)
-            plain = bool(np.array_equal(self.coord_map, np.eye(self.nv)))
-            cached = (tuple(j.name for j in rev), np.array([j.user_col for j in rev], dtype=int),
-                      A0, A1, A2, plain)
-            self.__dict__["_rodrigues_cache"] = cached
-        return cached
 
     def assemble(self, terms: PoseTerms, alg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Assemble M without design masses, M per unit design mass, and K.
@@ -740,7 +810,7 @@ class FlexibleModel:
         for pm in self.plan.point_masses:
             name, link, xyz = pm.name, pm.link, pm.xyz
             jl = terms.jac[link]
-            tau = self._twist_at(alg, pm.attach, twist[link])
+            tau = twist_at(alg, pm.attach, twist[link])
             g = np.concatenate(
                 [zeros_like(jl, nx) if tau is None else tau, translate_twist(xyz) @ jl], axis=-1
             )[..., :3, :]
@@ -769,7 +839,7 @@ class FlexibleModel:
         """
         twist: dict[str, np.ndarray | None] = {self.plan.root: None}
         for j in self.plan.joints:
-            tau = self._twist_at(alg, j.attach, twist[j.parent])
+            tau = twist_at(alg, j.attach, twist[j.parent])
             if tau is None:
                 twist[j.child] = None
                 continue
@@ -784,20 +854,15 @@ class FlexibleModel:
             twist[j.child] = j.proj @ alg.mm(rotate_twist(np.swapaxes(R, -1, -2)), tau)
         return twist
 
-    @staticmethod
-    def _twist_at(alg, att: Attachment, root_twist):
-        if root_twist is None or att.lin is None:
-            return None if att.const is None else alg.const(att.const)
-        out = att.lin @ root_twist
-        return out if att.const is None else out + alg.const(att.const)
-
-    def matrices(self, Q, y=None, *, check_bounds: bool = True):
+    def matrices(self, Q, y=None, *, check_bounds: bool = True,
+                 data: FlexibleData | None = None):
         """Mass and stiffness matrices at one pose (nv,) or many (n, nv).
 
         Args:
             Q: Joint coordinates (user convention) [rad or m].
             y: Design values [kg] (default: nominal).
             check_bounds: Raise when a design value leaves its bounds.
+            data: Workspace (default: this thread's).
 
         Returns:
             ``(M, K)``, each (ndof, ndof) for one pose or (n, ndof, ndof).
@@ -810,7 +875,7 @@ class FlexibleModel:
             raise ConfigurationError(
                 f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
             )
-        M, K = self.matrices_from_terms(self.pose_terms(Qb), y, Qb.shape[0])
+        M, K = self.matrices_from_terms(self.pose_terms(Qb, data=data), y, Qb.shape[0])
         return (M[0], K[0]) if single else (M, K)
 
     def matrices_from_terms(self, terms: PoseTerms, y: np.ndarray, n_poses: int):
@@ -830,6 +895,21 @@ class FlexibleModel:
         return design_channels.add_to(self, terms, y, M, K, n_poses)
 
     # ------------------------------------------------------------------ joint conditions
+    @property
+    def joint_conditions(self) -> tuple:
+        """Per moving joint its :class:`~pinflex.erls.joints.JointCondition` (velocity order)."""
+        return self.plan.conditions.conditions
+
+    @property
+    def kept_joints(self) -> tuple[str, ...]:
+        """Joints that are not locked: their coordinates are modal coordinates."""
+        return self.plan.conditions.kept_joints
+
+    @property
+    def n_rigid(self) -> int:
+        """Number of rigid (zero-frequency) modes: the free joints."""
+        return self.plan.conditions.n_rigid
+
     @property
     def n_elastic(self) -> int:
         """Number of non-rigid modes: elastic coordinates plus spring-held joints."""
@@ -886,7 +966,7 @@ class FlexibleModel:
         Raises:
             ConfigurationError: Invalid ``q`` (only checked when some joint is not free).
         """
-        return shapes if self._joints_plain else self.joint_transform(q) @ shapes
+        return shapes if self.plan.conditions.plain else self.joint_transform(q) @ shapes
 
     def relative_motion_rows(self, q) -> np.ndarray:
         """``G`` (nv, nx + nv): the joints' physical relative motion ``r = G [x; q_all]``.
@@ -912,7 +992,8 @@ class FlexibleModel:
                                                      self.root_twists(terms, alg))[0]
 
     # ------------------------------------------------------------------ modal analysis
-    def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True):
+    def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True,
+                    data: FlexibleData | None = None):
         """Non-rigid eigenfrequencies [Hz] at one pose (k,) or many (n, k), ascending.
 
         Batched: all poses are assembled and solved together. Frequencies are sorted at each
@@ -927,6 +1008,7 @@ class FlexibleModel:
                 for the nominal ones.
             n_modes: Keep the lowest ``n_modes`` (default: all ``nx``).
             check_bounds: Raise :class:`DesignVariableOutOfBounds` outside the bounds.
+            data: Workspace (default: this thread's, see :meth:`workspace`).
 
         Returns:
             Frequencies [Hz], (k,) or (n, k).
@@ -934,7 +1016,8 @@ class FlexibleModel:
         n_modes = self.check_n_modes(n_modes)
         Q = self.check_q(Q)
         check_modal(self.ndof, 1 if Q.ndim == 1 else Q.shape[0], "frequencies()")
-        return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds)
+        return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds,
+                                 data=self.workspace(data))
 
     def eigvals_from(self, M: np.ndarray, K: np.ndarray) -> np.ndarray:
         """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof).
@@ -953,7 +1036,8 @@ class FlexibleModel:
         """
         return modal.eigvals_from(self, M, K)
 
-    def modes(self, q, y=None, *, n_modes: int | None = None, check_bounds=True):
+    def modes(self, q, y=None, *, n_modes: int | None = None, check_bounds=True,
+              data: FlexibleData | None = None):
         """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
 
         Solves ``Kₓₓ φₓ = λ (Mₓₓ − Mₓq Mqq⁻¹ Mqx) φₓ`` (rigid coordinates condensed out, joints
@@ -966,6 +1050,7 @@ class FlexibleModel:
             y: Design values [kg] (default: nominal); ``{name: kg}`` accepted.
             n_modes: Number of lowest modes to compute (default: all ``nx``).
             check_bounds: Raise when a design value leaves its bounds.
+            data: Workspace (default: this thread's, see :meth:`workspace`).
 
         Returns:
             :class:`ModalResult`: ``freq_hz`` [Hz], ``eigvals`` [rad²/s²], ``shapes`` over
@@ -986,7 +1071,8 @@ class FlexibleModel:
                     f"modes() takes one design vector of {self.ny} values "
                     f"({', '.join(self.design_names)}), got an array of shape {y.shape}"
                 )
-        return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds)
+        return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds,
+                           data=self.workspace(data))
 
     def check_n_modes(self, n_modes):
         """``n_modes`` checked: None, or an int >= 1 (capped at the number of modes).

@@ -103,7 +103,7 @@ def supported(model) -> bool:
     It does for free joints and point-mass design variables; other joint conditions and
     design variables that change the beams (sections, materials) go through the nodal pencil.
     """
-    plain = bool(getattr(model, "_joints_plain", True))
+    plain = model.plan.conditions.plain
     masses = all(d.name in model.point_mass_values for d in model.design)
     return plain and masses and model.nx > 0
 
@@ -113,11 +113,12 @@ def _transport(d: float) -> np.ndarray:
     return translate_twist(np.array([d, 0.0, 0.0]))
 
 
-def solve_plan(model) -> SolvePlan:
-    """The (cached) constant data of the conditioned solve."""
-    cached = model.__dict__.get("_solve_plan")
-    if cached is not None:
-        return cached
+def solve_plan(model, data=None) -> SolvePlan:
+    """The constant data of the conditioned solve (built once per workspace ``data``)."""
+    return model.workspace(data).cached("solve_plan", lambda: _build_solve_plan(model))
+
+
+def _build_solve_plan(model) -> SolvePlan:
     cores = {}
     nx = model.nx
     for link, p in model.plan.beams.items():
@@ -163,9 +164,7 @@ def solve_plan(model) -> SolvePlan:
         )
     joint_attach = tuple(_attach(model, cores, j.parent, j.xyz) for j in model.plan.joints)
     pm_attach = tuple(_attach(model, cores, p.link, p.xyz) for p in model.plan.point_masses)
-    plan = SolvePlan(cores, joint_attach, pm_attach, nx, model.nv)
-    model.__dict__["_solve_plan"] = plan
-    return plan
+    return SolvePlan(cores, joint_attach, pm_attach, nx, model.nv)
 
 
 def _cumulative_transpose(X, P0, Ofs, le, n, r):
@@ -209,7 +208,7 @@ class _Batch:
         return a @ b
 
 
-def _algebra(alg, b: int):
+def lead_algebra(alg, b: int):
     """``alg`` as used here: the batch algebra of ``b`` poses, or a jet algebra.
 
     A jet algebra (``pinflex.parametric.matrices.JetAlgebra``) has the Taylor coefficients on
@@ -224,7 +223,7 @@ def _algebra(alg, b: int):
     return alg
 
 
-def _twist_at(att: _Attach, root, alg, nx: int):
+def attach_twist(att: _Attach, root, alg, nx: int):
     """Elastic twist (lead, 6, nx) at an attachment, or None when it is identically zero."""
     if att.const is None and root is None:
         return None
@@ -234,17 +233,19 @@ def _twist_at(att: _Attach, root, alg, nx: int):
     return out
 
 
-def _one_pose_joints(model, plan: SolvePlan) -> tuple:
-    """Per joint, the constants :func:`root_twists_one` uses (cached per model, read-only).
+def _one_pose_joints(model, plan: SolvePlan, data=None) -> tuple:
+    """Per joint, the constants :func:`root_twists_one` uses (cached per workspace, read-only).
 
     ``(const, P, needed)``: the attachment's constant part placed on all ``nx`` columns
     (6, nx) or None, the joint's projection as its two diagonal 3 × 3 blocks (2, 3, 3), times
     ``R_oᵀ`` for joints whose rotation is constant, and whether the one-pose solve reads the
     child's twist (or a descendant's).
     """
-    cached = model.__dict__.get("_one_pose_joints")
-    if cached is not None:
-        return cached
+    return model.workspace(data).cached("one_pose_joints",
+                                        lambda: _build_one_pose_joints(model, plan))
+
+
+def _build_one_pose_joints(model, plan: SolvePlan) -> tuple:
     # the links whose root twist the one-pose solve reads (beams, rigid inertias, point
     # masses) and their ancestors; joints to other links (a tool frame) are skipped
     needed = set(plan.cores) | set(model.plan.inertias) | {
@@ -264,12 +265,10 @@ def _one_pose_joints(model, plan: SolvePlan) -> tuple:
             P = P @ j.R_o.T
         P.setflags(write=False)
         out.append((const, P, j.child in needed))
-    cached = tuple(out)
-    model.__dict__["_one_pose_joints"] = cached
-    return cached
+    return tuple(out)
 
 
-def root_twists_one(model, plan: SolvePlan, terms) -> dict:
+def root_twists_one(model, plan: SolvePlan, terms, data=None) -> dict:
     """:func:`root_twists` of one pose (b = 1), without the algebra indirection.
 
     Only for the links the one-pose solve reads (beams, rigid inertias, point masses) and
@@ -278,7 +277,7 @@ def root_twists_one(model, plan: SolvePlan, terms) -> dict:
     nx = plan.nx
     twist: dict = {model.plan.root: None}
     for j, att, (const, P, needed) in zip(model.plan.joints, plan.joint_attach,
-                                          _one_pose_joints(model, plan)):
+                                          _one_pose_joints(model, plan, data)):
         if not needed:
             continue
         e = twist[j.parent]
@@ -302,10 +301,10 @@ def root_twists_one(model, plan: SolvePlan, terms) -> dict:
 
 def root_twists(model, plan: SolvePlan, terms, b: int, alg=None) -> dict:
     """Elastic twist of every link root (link axes) in solver coordinates, (b, 6, nx)."""
-    alg = _algebra(alg, b)
+    alg = lead_algebra(alg, b)
     twist = {model.plan.root: None}
     for j, att in zip(model.plan.joints, plan.joint_attach):
-        tau = _twist_at(att, twist[j.parent], alg, plan.nx)
+        tau = attach_twist(att, twist[j.parent], alg, plan.nx)
         if tau is None:
             twist[j.child] = None
             continue
@@ -352,7 +351,7 @@ def factored_twists(model, plan: SolvePlan, terms, alg):
                 e_full = np.zeros((alg.size, 6, plan.nx))
                 e_full[:, :, : e_par.shape[-1]] = e_par
                 e_par = e_full
-            tau = _twist_at(att, e_par, alg, plan.nx)
+            tau = attach_twist(att, e_par, alg, plan.nx)
             if tau is None:
                 twists[j.child] = None
                 continue
@@ -385,7 +384,7 @@ def explicit_twist(tw, sources, alg, stop: int | None = None):
     return alg.mm(T, tau)
 
 
-def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
+def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=None):
     """Mass matrix (b, ndof, ndof) in solver coordinates ``[w; q]`` (stiffness: ``I`` on w).
 
     Args:
@@ -396,9 +395,10 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
         alg: A jet algebra to assemble Taylor coefficients instead of poses.
         split: Return ``(M0, Mdesign)``: the mass without design point masses and the mass
             per unit design value, (ny, lead, nd, nd).
+        data: Workspace (default: this thread's).
     """
-    plan = solve_plan(model)
-    alg = _algebra(alg, b)
+    plan = solve_plan(model, data)
+    alg = lead_algebra(alg, b)
     mm, c0, lead = alg.mm, alg.const_at, alg.size
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
@@ -451,9 +451,7 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
 
     for link, inertia in model.plan.inertias.items():
         add_rigid(-1, link, None, terms.jac[link], inertia)
-    design_index = getattr(model, "_mass_design_index", None)
-    if design_index is None:
-        design_index = {d.name: i for i, d in enumerate(model.design)}
+    design_index = model.plan.design.mass_index
     eye3 = np.eye(3)
     for pm, att in zip(model.plan.point_masses, plan.pm_attach):
         name, link, xyz = pm.name, pm.link, pm.xyz
@@ -479,7 +477,7 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False):
             if e is not None:
                 e_full = np.zeros((lead, 6, nx))
                 e_full[:, :, : e.shape[-1]] = e
-            tau = _twist_at(att, e_full, alg, nx)
+            tau = attach_twist(att, e_full, alg, nx)
             g = np.zeros((lead, 3, nd))
             if tau is not None:
                 g[:, :, :nx] = tau[:, :3]
@@ -547,15 +545,18 @@ class OnePoseLayout:
         self.F, self.field_rows = F, field_rows
 
 
-def one_pose_layout(model) -> OnePoseLayout | None:
-    """The (cached) :class:`OnePoseLayout` of a model, or None when it is too large.
+def one_pose_layout(model, data=None) -> OnePoseLayout | None:
+    """The :class:`OnePoseLayout` of a model (built once per workspace), or None when too large.
 
     Above :data:`ONE_POSE_MAX_ROWS` rows a dense ``W`` would cost more than the structured
     assembly of :func:`mass`.
     """
-    if "_one_pose_layout" in model.__dict__:
-        return model.__dict__["_one_pose_layout"]
-    plan = solve_plan(model)
+    return model.workspace(data).cached("one_pose_layout",
+                                        lambda: _build_one_pose_layout(model, data))
+
+
+def _build_one_pose_layout(model, data) -> OnePoseLayout | None:
+    plan = solve_plan(model, data)
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
     carriers = set(plan.cores) | set(model.plan.inertias)  # links that own rows
@@ -563,7 +564,6 @@ def one_pose_layout(model) -> OnePoseLayout | None:
     n_rows = (sum(c.stop - c.start + 12 for c in plan.cores.values())
               + 6 * len(model.plan.inertias) + 3 * sum(own_rows))
     if n_rows > ONE_POSE_MAX_ROWS:
-        model.__dict__["_one_pose_layout"] = None
         return None
     S0 = np.zeros((n_rows, nd))
     W0 = np.zeros((n_rows, n_rows))
@@ -602,9 +602,7 @@ def one_pose_layout(model) -> OnePoseLayout | None:
         inertias.append((link, r))
         blocks_of.setdefault(link, (r, 6))
         r += 6
-    design_index = getattr(model, "_mass_design_index", None)
-    if design_index is None:
-        design_index = {d.name: i for i, d in enumerate(model.design)}
+    design_index = model.plan.design.mass_index
     diag, cols, folded = [], [], []
     for pm, att, own in zip(model.plan.point_masses, plan.pm_attach, own_rows):
         if not own:  # velocity = T (rows of its link's block): weight m TᵀT on that block
@@ -674,11 +672,9 @@ def one_pose_layout(model) -> OnePoseLayout | None:
     F = np.ascontiguousarray(np.concatenate(blocks))
     for a in (S0, W0, A2, X, links, F):
         a.setflags(write=False)
-    layout = OnePoseLayout(S0, W0, tuple(beams), tuple(inertias), tuple(masses), diag_idx,
-                           np.concatenate(cols) if cols else np.zeros(0, int),
-                           A2, X, links, node_slices, F, field_rows, tuple(folded), keep)
-    model.__dict__["_one_pose_layout"] = layout
-    return layout
+    return OnePoseLayout(S0, W0, tuple(beams), tuple(inertias), tuple(masses), diag_idx,
+                         np.concatenate(cols) if cols else np.zeros(0, int),
+                         A2, X, links, node_slices, F, field_rows, tuple(folded), keep)
 
 
 def _planar_zero_rows(model, beams, inertias) -> np.ndarray:
@@ -1015,9 +1011,9 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
     return lam, shapes_w, shapes_x
 
 
-def to_nodal(model, twist: dict, shapes: np.ndarray) -> np.ndarray:
+def to_nodal(model, twist: dict, shapes: np.ndarray, data=None) -> np.ndarray:
     """Shapes over ``[x; q]`` (nodal coordinates) of solver-coordinate shapes ``[w; q]``."""
-    plan = solve_plan(model)
+    plan = solve_plan(model, data)
     nx = plan.nx
     out = np.array(shapes, dtype=float)
     w = shapes[:nx]

@@ -4,11 +4,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pinflex.description import FlexibleLink
 from pinflex.linalg import skew
+
+if TYPE_CHECKING:
+    from pinflex.erls.design import DesignLayout
+    from pinflex.erls.joints import JointLayout
 
 PLANAR_NODE_DOFS = (0, 1, 5)  # ux, uy, θz in beam axes (beam z = plane normal)
 
@@ -157,6 +162,10 @@ class ModelPlan:
         nx: Number of elastic coordinates.
         x_names: Names of the elastic coordinates ``link.nK.{u,r}{x,y,z}``, (nx,).
         plane_normal: (3,) world normal of the plane of motion of a planar model, or None.
+        conditions: The joint conditions and the modal coordinates they define
+            (:class:`pinflex.erls.joints.JointLayout`).
+        design: The design-dependent channels of ``M`` and ``K``
+            (:class:`pinflex.erls.design.DesignLayout`).
     """
 
     links: tuple[str, ...]
@@ -169,6 +178,8 @@ class ModelPlan:
     nx: int
     x_names: tuple[str, ...]
     plane_normal: np.ndarray | None = None
+    conditions: JointLayout = None  # type: ignore[assignment]  # set by FlexibleModel
+    design: DesignLayout = None  # type: ignore[assignment]  # set by FlexibleModel
 
     @property
     def root(self) -> str:
@@ -229,6 +240,23 @@ class BatchAlgebra:
     def mm(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Product of two pose-dependent matrices."""
         return a @ b
+
+
+def twist_at(alg, att: Attachment, root_twist):
+    """Elastic twist at an attachment point from its link's root twist, or None if zero.
+
+    Args:
+        alg: The algebra of the leading axis (``alg.const`` lifts a constant).
+        att: The point's :class:`Attachment` (constant and root-linear parts).
+        root_twist: The link's elastic root twist (b, 6, nx), or None where it is zero.
+
+    Returns:
+        ``att.lin @ root_twist + att.const`` (b, 6, nx), or None when both parts vanish.
+    """
+    if root_twist is None or att.lin is None:
+        return None if att.const is None else alg.const(att.const)
+    out = att.lin @ root_twist
+    return out if att.const is None else out + alg.const(att.const)
 
 
 def offset_block(p: np.ndarray) -> np.ndarray:

@@ -152,8 +152,7 @@ def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int,
     emb = np.array([space.index[a + zeros] for a in alphas])
     # only design point masses have a mass per unit value (section parameters: zero); add
     # them in the joints' space before the one embedding copy
-    index = getattr(model, "_mass_design_index", None)  # as solve.mass reads it
-    masses = list(range(model.ny)) if index is None else sorted(set(index.values()))
+    masses = sorted(set(model.plan.design.mass_index.values()))  # as solve.mass reads it
     for j in masses:
         if y0[j] != 0.0:
             Mq += y0[j] * Mdq[j]

@@ -1039,7 +1039,7 @@ def expand(model: FlexibleModel, q0, y0=None, *, order: int = 4, modes: Sequence
         # pencil badly: its bordered matrices fail the condition check or its highest modes
         # the resolution check, where the nodal pencil still resolves them. Such refusals
         # are taken again on the nodal pencil, which raises its own error if it refuses too.
-        if not model._spring_joints:
+        if not model.plan.conditions.spring_joints:
             raise refused.error from None
         space, lam, w, slopes, jidx, didx = _expansion_jets(model, q0, y0, order, joints,
                                                             design, idx, False)
@@ -1083,7 +1083,7 @@ def _expansion_jets(model, q0, y0, order, joints, design, idx, solver):
                                               design=design)
         rspace, keep = space, list(range(space.nvars))
     try:
-        if solver and K.ndim == 2 and not model._locked_joints:
+        if solver and K.ndim == 2 and not model.plan.conditions.locked_joints:
             w, V = expansion_eigenpairs(model, M[0])
         elif solver:  # design-dependent stiffness, springs or locks: not the plain layout
             w, V = solver_design.expansion_eigenpairs(model, K if K.ndim == 2 else K[0], M[0])

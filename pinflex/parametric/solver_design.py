@@ -66,9 +66,10 @@ def link_blocks(model) -> dict:
     Returns ``{channel index: block}``: for a stiffness channel the per-element ``K̂_c``
     (r × r), for a mass channel the six blocks ``(H_oo, H_oe, H_ov, H_ee, H_ev, H_vv)``.
     """
-    cached = model.__dict__.get("_solver_design_blocks")
-    if cached is not None:
-        return cached
+    return model.workspace().cached("solver_design_blocks", lambda: _build_link_blocks(model))
+
+
+def _build_link_blocks(model) -> dict:
     plan = solve.solve_plan(model)
     out: dict = {}
     for n, ch in enumerate(model.design_channels):
@@ -97,7 +98,6 @@ def link_blocks(model) -> dict:
         o = core.stop - core.start
         out[n] = (H[:o, :o], H[:o, o : o + 6], H[:o, o + 6 :], H[o : o + 6, o : o + 6],
                   H[o : o + 6, o + 6 :], H[o + 6 :, o + 6 :])
-    model.__dict__["_solver_design_blocks"] = out
     return out
 
 
@@ -138,7 +138,7 @@ def spring_rows(model, terms, alg, twists, sources, joint) -> np.ndarray:
         e = solve.explicit_twist(tw, sources, alg)
         e_full = np.zeros((alg.size, 6, nx))
         e_full[:, :, : e.shape[-1]] = e
-    tau = solve._twist_at(plan.joint_attach[k], e_full, alg, nx)
+    tau = solve.attach_twist(plan.joint_attach[k], e_full, alg, nx)
     g = np.zeros((alg.size, 1, nd))
     if tau is not None:
         a = joint.R_o @ joint.axis  # the joint axis in parent link axes
@@ -175,10 +175,10 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
     channels = model.design_channels
-    locks = bool(model._locked_joints)
-    if not channels and not model._spring_joints and not locks:
+    locks = bool(model.plan.conditions.locked_joints)
+    if not channels and not model.plan.conditions.spring_joints and not locks:
         return M, K0
-    salg = solve._algebra(alg, 1)
+    salg = solve.lead_algebra(alg, 1)
     twists, sources = solve.factored_twists(model, plan, terms, salg)
     nq = salg.size  # coefficients of the joints' space (1 without joints)
     nd_vars = len(design_idx)
@@ -191,12 +191,12 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
     emb = np.array([space.index[a + zeros] for a in alphas])
     K = np.zeros((space.ncoef, nd, nd))
     K[0] = K0
-    stiff = bool(model._spring_joints)  # whether K differs from K0
+    stiff = bool(model.plan.conditions.spring_joints)  # whether K differs from K0
     # springs at their nominal stiffness: K += k gᵀ g (pose jets at zero design degree); a
     # design stiffness adds (k(y) − k(nom)) gᵀ g below, as a channel
     units = {j.name: _spring_unit(model, terms, salg, twists, sources, j)
-             for j, _ in model._spring_joints}
-    for j, k in model._spring_joints:
+             for j, _ in model.plan.conditions.spring_joints}
+    for j, k in model.plan.conditions.spring_joints:
         K[emb] += k * units[j.name]
     if channels:
         names = [d.name for d in model.design]
@@ -259,15 +259,15 @@ def _eliminate_locks(model, space: JetSpace, terms, salg, twists, sources, emb, 
     nx = model.nx
     nd = nx + model.nv
     ndof = model.ndof
-    T0 = model._lock_T0
-    rows = np.asarray(model._lock_rows, dtype=int)
+    T0 = model.plan.conditions.lock_T0
+    rows = np.asarray(model.plan.conditions.lock_rows, dtype=int)
     others = np.setdiff1d(np.arange(nd), rows)
     cols = np.argmax(T0[others], axis=1)  # each kept coordinate's modal column
     G = np.stack([-spring_rows(model, terms, salg, twists, sources, j)[:, 0, :nx]
-                  for j in model._locked_joints], axis=1)  # (lead, nL, nx)
+                  for j in model.plan.conditions.locked_joints], axis=1)  # (lead, nL, nx)
     TL = np.zeros((space.ncoef, rows.size, ndof))
     TL[0] = T0[rows]
-    TL[emb, :, :nx] += np.einsum("lm,cmx->clx", model._lock_inv, G)
+    TL[emb, :, :nx] += np.einsum("lm,cmx->clx", model.plan.conditions.lock_inv, G)
     alg = SparseJetAlgebra(space)
 
     def right(X):  # X @ T for a jet X (ncoef, r, nd)
@@ -309,15 +309,15 @@ def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
     nd = K0.shape[0]
     nx = model.nx
     Z = None
-    Winv = getattr(model, "_modal_Winv", None)
+    Winv = model.plan.conditions.modal_Winv
     if Winv is not None:
         # absolute user angles: split free and sprung joints in relative values r = W q_kept
         # (:func:`pinflex.erls.joints.setup`), where a free joint carries no stiffness
         Z = np.eye(nd)
         Z[nx:, nx:] = Winv
         K0, M0 = Z.T @ K0 @ Z, Z.T @ M0 @ Z
-    e = np.asarray(model._elastic_cols, dtype=int)
-    fr = np.asarray(model._rigid_cols, dtype=int)
+    e = np.asarray(model.plan.conditions.elastic_cols, dtype=int)
+    fr = np.asarray(model.plan.conditions.rigid_cols, dtype=int)
     L = np.linalg.cholesky(K0[np.ix_(e, e)])
     Linv = np.linalg.inv(L)  # u = Lᵀ z: z = L⁻ᵀ u
     Mue = Linv @ M0[np.ix_(e, e)] @ Linv.T
