@@ -96,7 +96,7 @@ def check_cost(model, rounds):
 def tracking_cost(model, rounds):
     """Median and range of verify_tracked / exact_errors time on benchmark A, interleaved."""
     from pinflex.assignment import Target, exact_errors
-    from pinflex.assignment.driver import target_matrix
+    from pinflex.assignment.targets import target_matrix
     from pinflex.assignment.verify import verify_tracked
 
     traj = user_trajectory(model, "benchmark_a")

@@ -151,6 +151,14 @@ class AssignmentNotImproved(AssignmentWarning):
     """The assigned design's exact (tracked) target error is larger than the one before."""
 
 
+class PredictionNotConfirmed(AssignmentWarning):
+    """The exact model does not confirm the Taylor model's prediction of an answer."""
+
+
+class FloorsNotMet(AssignmentWarning):
+    """A floor, band or mass budget holds on the prediction but not on the exact model."""
+
+
 class ModeCrossingWarning(PinflexWarning):
     """A mode crosses or veers with another along a trajectory: sorted and tracked differ."""
 

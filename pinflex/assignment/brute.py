@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.assignment.driver import Target, target_matrix
+from pinflex.assignment.targets import Target, target_matrix
 from pinflex.erls import FlexibleModel
 from pinflex.erls.model import add_design_masses
 from pinflex.exceptions import ConfigurationError

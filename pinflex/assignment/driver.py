@@ -1,11 +1,32 @@
-"""Eigenfrequency assignment along a trajectory (paper 000 Sec. 2.4), verified exactly.
+"""Eigenfrequency assignment along a trajectory (paper 000 Sec. 2.4), right or refused.
 
-:func:`build_assignment` expands the chosen modes at ``(q0, y0)`` (:mod:`pinflex.parametric`),
-samples the partially linear polynomials ``l_{i,0}(q(t))``, ``l_{i,j}(q(t))`` on the
-trajectory and returns the QP (12)–(14) with the trapezoidal rule on the trajectory grid
-(:mod:`pinflex.assignment.problem`). :func:`assign_frequencies` solves it with ProxQP, then checks
-every answer with the exact ERLS model along the whole trajectory; errors reported before and
-after always come from the exact model.
+:func:`assign_frequencies` builds the QP (12)–(14) from a Taylor model
+(:mod:`pinflex.assignment.build`), solves it with ProxQP and checks every answer with the
+exact ERLS model along the whole trajectory; errors reported before and after always come
+from the exact model.
+
+Confirmation loop. The QP's model is the partially linear polynomial of eq. (9); with
+section or material variables on a real arm it can be far off a few millimetres from its
+expansion design (Kinova Jaco2, tube diameters, locked joints: 3.95 % predicted, 42.87 %
+exact). An answer counts only when the exact model confirms its prediction: the largest
+``|predicted / exact − 1|`` over the samples and the target, floor and band modes must be at
+most ``confirm_tol`` (:data:`CONFIRM_TOL`, 0.5 % by default). Until it is, a trust-region
+loop runs on the exact model:
+
+1. a candidate whose exact cost (the QP's cost with exact frequencies) is lower than the
+   current design's, or whose floor/band/budget violation is smaller, is accepted: the model
+   is re-expanded there (floors shifted by the exact-minus-predicted offsets at that design)
+   and the QP solved again, inside a trust region twice as large;
+2. a candidate that is not better is rejected: the trust region around the current design is
+   halved and the QP solved again on the same model.
+
+It stops when a candidate is confirmed and meets its floors (with ``refine=True``, when the
+exact cost also stops falling), after ``max_refinements`` re-expansions, or when the trust
+region falls below ``1e-6`` of the variables' ranges. The answer is the best confirmed
+candidate; if none was confirmed, the best candidate with ``confirmed=False`` and a
+:class:`~pinflex.exceptions.PredictionNotConfirmed` warning. ``result.status`` says in one
+word whether the exact model meets everything (:mod:`pinflex.assignment.result`); the command
+line exits with 3 when it does not.
 
 Mode identity: a target "mode i" is mode i at the expansion point, followed by shape along the
 design change and the trajectory (:mod:`pinflex.assignment.verify`, :mod:`pinflex.tracking`);
@@ -13,9 +34,9 @@ design change and the trajectory (:mod:`pinflex.assignment.verify`, :mod:`pinfle
 sorted mode numbers. When a target mode crosses or veers with another one along the trajectory
 the two differ and :class:`~pinflex.exceptions.ModeCrossingWarning` is issued. A design whose
 tracked exact error is larger than before is never reported as an improvement: ``improved``
-is False and :class:`~pinflex.exceptions.AssignmentNotImproved` is issued (the design is still
-returned, for inspection; nothing is refused). Floors that the polynomial declares infeasible
-are checked on the exact model before refusing (see :mod:`pinflex.assignment.verify`).
+is False and :class:`~pinflex.exceptions.AssignmentNotImproved` is issued. Floors that the
+polynomial declares infeasible are checked on the exact model before refusing
+(:mod:`pinflex.assignment.floors`).
 
 Quantity: targets are frequencies [Hz] and, by default, the polynomial expanded for the cost is
 the frequency ``f = √λ / 2π`` (``quantity="freq_hz"``). On benchmark A it is about twice as
@@ -26,324 +47,63 @@ vs 2.69 % over y ∈ [0, 0.25]², ``benchmarks/bench_taylor.py``); ``quantity="e
 
 from __future__ import annotations
 
-import itertools
+import dataclasses
 import time
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.assignment.points import PiecewiseTaylor
-from pinflex.assignment.problem import AssignmentQP, QPSolution, build_assignment_qp
-from pinflex.assignment.solve import solve_assignment_qp
-from pinflex.assignment.verify import (
-    Verification,
-    exact_floor_candidates,
-    floor_margins,
-    verify_tracked,
+from pinflex.assignment.build import budget_mass, build_assignment, design_region, predicted_hz
+from pinflex.assignment.floors import (
+    FLOOR_RTOL,
+    corrected_floors,
+    floors_on_exact,
+    violation,
 )
+from pinflex.assignment.points import PiecewiseTaylor
+from pinflex.assignment.problem import AssignmentQP, QPSolution
+from pinflex.assignment.result import AssignmentResult, outcome
+from pinflex.assignment.solve import solve_assignment_qp
+from pinflex.assignment.targets import Target, check_trajectory_limits, target_matrix
+from pinflex.assignment.verify import Verification, floor_margins, verify_tracked
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import (
     AssignmentInfeasible,
     AssignmentNotImproved,
     AssignmentWarning,
     ConfigurationError,
-    InvalidTrajectory,
+    FloorsNotMet,
     ModeCrossingWarning,
+    PredictionNotConfirmed,
 )
-from pinflex.parametric import TaylorModel, expand
+from pinflex.parametric import TaylorModel
+from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory
 
+__all__ = [
+    "CONFIRM_TOL",
+    "TARGET_TOL",
+    "AssignmentResult",
+    "Target",
+    "assign_frequencies",
+    "build_assignment",
+    "check_trajectory_limits",
+    "design_region",
+    "exact_errors",
+    "target_matrix",
+]
 
-@dataclass(frozen=True)
-class Target:
-    """A desired frequency history of one mode.
+#: Default ``confirm_tol``: the largest relative difference between an answer's predicted and
+#: exact frequencies (target, floor and band modes, every sample) for the answer to count.
+CONFIRM_TOL = 5e-3
 
-    Attributes:
-        mode: Non-rigid mode number (1 = lowest).
-        freq_hz: Desired frequency [Hz]: a constant or one value per trajectory sample.
-        weight: Weight of the mode in the cost.
-    """
+#: Default ``target_tol``: an exact target error above it (5 %) is "target_missed".
+TARGET_TOL = 0.05
 
-    mode: int
-    freq_hz: float | np.ndarray
-    weight: float = 1.0
-
-
-@dataclass(frozen=True)
-class AssignmentResult:
-    """Answer of an assignment, with its exact verification.
-
-    Attributes:
-        found: Whether the QP was solved.
-        design: Final design values by name [kg].
-        y: Final design vector [kg], (ny,).
-        y_before: Design before assignment [kg], (ny,).
-        modes: Modes reported in the frequency arrays (targets first, then others).
-        targets_hz: Target histories (n_targets, ns) [Hz].
-        freq_before_hz: Exact frequencies before, (ns, len(modes)) [Hz].
-        freq_after_hz: Exact frequencies after, (ns, len(modes)) [Hz].
-        max_error_before: Largest relative target error before (exact model), fraction.
-        max_error_after: Largest relative target error after (exact model), fraction.
-        predicted_max_error_after: The same, predicted by the partially linear polynomial.
-        problem: The last QP solved.
-        solution: Its ProxQP answer.
-        taylor: The Taylor model the last QP was built from.
-        refinements: Re-expansions accepted by the sequential refinement.
-        timings_s: Compute time of each stage [s] (wall clock).
-        cpu_timings_s: The same stages in CPU time of the calling thread [s] (with
-            single-thread BLAS all of the work; a loaded machine does not inflate it).
-        settings: The constraints the problem was built with: ``mass_budget_kg``,
-            ``floors`` ``[(mode, f_min_hz)]``, ``bands`` ``[(mode, a_hz, b_hz)]``,
-            ``quantity`` (see :mod:`pinflex.assignment.report`).
-        freq_before_sorted_hz: Exact frequencies before of the sorted mode numbers.
-        freq_after_sorted_hz: The same after.
-        max_error_before_sorted: Largest target error before on the sorted mode numbers.
-        max_error_after_sorted: The same after.
-        improved: Whether the tracked exact error went down (never True when it went up).
-        events: Crossings, veering and ambiguous steps of the target modes along the
-            trajectory, before and after (:class:`pinflex.tracking.ModeEvent`).
-        floors_model: Which model the floors were enforced on: ``""`` (no floors),
-            ``"taylor"`` (the partially linear polynomial) or ``"taylor+exact"`` (corrected by
-            the exact model after the polynomial alone refused them).
-        floor_margin_hz: Smallest exact margin of the floors after (tracked modes) [Hz];
-            negative when a floor is violated on the exact model.
-        joints: The joint conditions the assignment was made under (``{joint: label}``).
-    """
-
-    found: bool
-    design: dict[str, float]
-    y: np.ndarray
-    y_before: np.ndarray
-    modes: tuple[int, ...]
-    targets_hz: np.ndarray
-    freq_before_hz: np.ndarray
-    freq_after_hz: np.ndarray
-    max_error_before: float
-    max_error_after: float
-    predicted_max_error_after: float
-    problem: AssignmentQP
-    solution: QPSolution
-    taylor: TaylorModel | PiecewiseTaylor
-    refinements: int = 0
-    timings_s: dict[str, float] = field(default_factory=dict)
-    settings: dict = field(default_factory=dict)
-    freq_before_sorted_hz: np.ndarray | None = None
-    freq_after_sorted_hz: np.ndarray | None = None
-    max_error_before_sorted: float = float("nan")
-    max_error_after_sorted: float = float("nan")
-    improved: bool = True
-    events: tuple = ()
-    floors_model: str = ""
-    floor_margin_hz: float | None = None
-    joints: dict[str, str] = field(default_factory=dict)
-    cpu_timings_s: dict[str, float] = field(default_factory=dict)
-
-
-def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
-    """Target frequencies (n_targets, ns) [Hz] of ``targets`` on ``ns`` samples (checked)."""
-    out = np.empty((len(targets), ns))
-    for i, t in enumerate(targets):
-        f = np.broadcast_to(np.asarray(t.freq_hz, dtype=float), (ns,))
-        if np.any(~np.isfinite(f)) or np.any(f <= 0):
-            raise ConfigurationError(f"target of mode {t.mode} must be positive frequencies [Hz]")
-        out[i] = f
-    return out
-
-
-def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> None:
-    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits.
-
-    The samples are converted to Pinocchio's joint values, which the limits refer to, and
-    checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off).
-
-    Args:
-        model: The flexible model whose URDF holds the limits [rad or m].
-        trajectory: Joint samples (ns, nv) in the model's user coordinates, one value per
-            moving joint.
-
-    Raises:
-        InvalidTrajectory: If the samples do not have one column per joint of the model.
-    """
-    q = np.asarray(trajectory.q)
-    if q.ndim != 2 or q.shape[1] != len(model.joint_names):
-        raise InvalidTrajectory(
-            f"the trajectory has samples of shape {q.shape}; the model needs (n_samples, "
-            f"{len(model.joint_names)}): one column per joint {list(model.joint_names)}")
-    joints = [model.description.joints[name] for name in model.joint_names]
-    in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
-    in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
-
-
-def build_assignment(
-    model: FlexibleModel,
-    trajectory: Trajectory,
-    targets: Sequence[Target],
-    *,
-    q0=None,
-    y0=None,
-    order: int = 4,
-    quantity: str = "freq_hz",
-    design: Sequence[str] | None = None,
-    mass_budget_kg: float | None = None,
-    A_ineq=None,
-    b_ineq=None,
-    floors: Sequence[tuple[int, float]] = (),
-    bands: Sequence[tuple[int, float, float]] = (),
-    taylor: TaylorModel | PiecewiseTaylor | None = None,
-    taylor_tol: float | None = None,
-    points_tol: float | None = None,
-) -> tuple[AssignmentQP, TaylorModel | PiecewiseTaylor]:
-    """Build the assignment QP of ``targets`` along ``trajectory`` (not solved).
-
-    Args:
-        model: The flexible model.
-        trajectory: Joint samples in the model's user coordinates.
-        targets: Desired frequency histories.
-        q0: Expansion pose (default: the sample in the middle of the trajectory).
-        y0: Expansion design [kg] (default: the URDF's nominal values).
-        order: Taylor order p.
-        quantity: 'freq_hz' (expand f [Hz]) or 'eigval' (expand λ [rad²/s²]).
-        design: Design variables to choose (default all).
-        mass_budget_kg: Upper bound of the design mass of the chosen variables [kg]: their
-            point masses plus the beam mass of links whose section or material they set
-            (:func:`pinflex.erls.design.design_mass`, linearised at ``y0``).
-        A_ineq: Extra rows ``A_ineq (y − y0) <= b_ineq`` on the chosen variables.
-        b_ineq: Right-hand side of ``A_ineq``.
-        floors: ``(mode, f_min_hz)``: the mode's predicted frequency stays above f_min
-            (a constant or one value per sample).
-        bands: ``(mode, a_hz, b_hz)``: forbidden band of a mode (see
-            :func:`pinflex.assignment.problem.build_assignment_qp`).
-        taylor: Reuse this Taylor model instead of expanding.
-        taylor_tol: Pick the Taylor order (1–8, ``order`` is then ignored): the lowest whose
-            two-term estimate (the larger of the next two orders' terms) of the relative
-            error of ``quantity`` meets it along the trajectory at ``y0`` and at the corners
-            of the design box
-            (:func:`pinflex.parametric.fidelity.order_for_tolerance`); the model's
-            ``order_choice`` reports it.
-        points_tol: Cover the trajectory with the fewest Taylor expansion points (then the
-            lowest order) whose two-term estimate meets it at every sample at ``y0``
-            (:func:`pinflex.assignment.points.points_for_tolerance`); each sample's QP rows
-            come from its segment's model, ``q0`` and ``order`` are then ignored and the
-            model's ``points_choice`` reports the choice.
-
-    Returns:
-        ``(problem, taylor_model)``; the QP's variables are ``δy = y − y0`` of ``design``.
-    """
-    if not targets:
-        raise ConfigurationError("give at least one target")
-    if quantity not in ("freq_hz", "eigval"):
-        raise ConfigurationError(f"quantity='{quantity}': expected 'freq_hz' or 'eigval'")
-    Q = model.check_q(trajectory.q)
-    if Q.ndim != 2:
-        raise ConfigurationError("the trajectory needs joint samples of shape (ns, nv)")
-    ns = Q.shape[0]
-    if q0 is None:
-        q0 = Q[ns // 2]
-    y0 = model.check_y(y0)
-    modes = []
-    for m in [t.mode for t in targets] + [f[0] for f in floors] + [b[0] for b in bands]:
-        if m not in modes:
-            modes.append(int(m))
-    if taylor_tol is not None and points_tol is not None:
-        raise ConfigurationError("give taylor_tol (one point, order by tolerance) or "
-                                 "points_tol (expansion points by tolerance), not both")
-    if taylor is None and points_tol is not None:
-        from pinflex.assignment.points import points_for_tolerance
-
-        taylor = points_for_tolerance(model, Q, y0, tol=points_tol, modes=modes, design=design,
-                                      quantity=quantity)
-    elif taylor is None and taylor_tol is not None:
-        over = design_region(model, Q, y0, design)
-        taylor = expand(model, q0, y0, order=8, modes=modes, design=design, tol=taylor_tol,
-                        over=over)
-    elif taylor is None:
-        taylor = expand(model, q0, y0, order=order, modes=modes, design=design)
-    else:
-        missing = set(modes) - set(taylor.modes)
-        if missing:
-            raise ConfigurationError(f"the given Taylor model lacks modes {sorted(missing)}")
-    pos = [taylor.modes.index(m) for m in modes]
-    l0, L = taylor.linear_parts(Q, quantity=quantity)
-    l0, L = l0[:, pos].T, np.transpose(L[:, pos, :], (1, 0, 2))
-    tgt = target_matrix(targets, ns)
-    full_targets = np.zeros((len(modes), ns))
-    weights = np.zeros(len(modes))
-    for t, row in zip(targets, tgt):
-        k = modes.index(t.mode)
-        full_targets[k] = row
-        weights[k] = t.weight
-    floor_arr = None
-    if floors:
-        floor_arr = np.full((len(modes), ns), -np.inf)
-        for m, f in floors:
-            floor_arr[modes.index(m)] = np.maximum(floor_arr[modes.index(m)], f)
-    band_list = [(modes.index(m), a, b) for m, a, b in bands]
-
-    def conv(v):
-        return (2 * np.pi * np.asarray(v, dtype=float)) ** 2 if quantity == "eigval" else v
-
-    if quantity == "eigval":
-        full_targets = conv(full_targets)
-        floor_arr = None if floor_arr is None else np.where(np.isfinite(floor_arr),
-                                                             conv(floor_arr), -np.inf)
-        band_list = [(k, float(conv(a)), float(conv(b))) for k, a, b in band_list]
-    didx = list(taylor.design_idx)
-    y0v = taylor.y0
-    lower = np.array([model.design[j].lower for j in didx]) - y0v[didx]
-    upper = np.array([model.design[j].upper for j in didx]) - y0v[didx]
-    A_rows, b_rows = [], []
-    if mass_budget_kg is not None:
-        # the design mass: design point masses plus the beams of designed links (exactly the
-        # sum of the masses when only point masses are designed; linearised at y0 otherwise)
-        from pinflex.erls.design import design_mass
-
-        m0, grad = design_mass(model, y0v, order=1)
-        others = [j for j in range(model.ny) if j not in didx]
-        fixed = float(np.sum(y0v[others])) if all(
-            model.design[j].kind == "mass" for j in others) else 0.0
-        A_rows.append(grad[didx])
-        b_rows.append(float(mass_budget_kg) - (m0 - fixed))
-    if A_ineq is not None:
-        A_rows.extend(np.atleast_2d(np.asarray(A_ineq, dtype=float)))
-        b_rows.extend(np.atleast_1d(np.asarray(b_ineq, dtype=float)))
-    problem = build_assignment_qp(
-        l0, L, full_targets, trajectory.trapezoid_weights(),
-        lower=lower, upper=upper,
-        A_ineq=np.array(A_rows) if A_rows else None,
-        b_ineq=np.array(b_rows) if b_rows else None,
-        floors=floor_arr, bands=band_list or None, mode_weights=weights,
-        names=[model.design[j].name for j in didx],
-    )
-    return problem, taylor
-
-
-def design_region(model: FlexibleModel, Q: np.ndarray, y0: np.ndarray,
-                  design: Sequence[str] | None) -> tuple[np.ndarray, np.ndarray]:
-    """Samples ``(Q, Y)`` where an assignment's Taylor model is used.
-
-    The trajectory at ``y0`` and at every corner of the box of the chosen design variables
-    (≤ 6 of them; at each bound along each axis otherwise); infinite bounds are left out.
-    """
-    names = model.design_names if design is None else tuple(design)
-    didx = [model.design_names.index(n) for n in names]
-    designs = [np.asarray(y0, dtype=float)]
-    bounds = [[b for b in (model.design[j].lower, model.design[j].upper) if np.isfinite(b)]
-              for j in didx]
-    if len(didx) <= 6:
-        for corner in itertools.product(*bounds):
-            y = designs[0].copy()
-            y[didx] = corner
-            designs.append(y)
-    else:
-        for j, bj in zip(didx, bounds):
-            for b in bj:
-                y = designs[0].copy()
-                y[j] = b
-                designs.append(y)
-    ns = Q.shape[0]
-    return np.tile(Q, (len(designs), 1)), np.repeat(np.array(designs), ns, axis=0)
+#: Trust region below this fraction of every variable's range: the loop stops.
+_XTOL = 1e-6
 
 
 def exact_errors(model: FlexibleModel, Q: np.ndarray, y: np.ndarray,
@@ -353,7 +113,7 @@ def exact_errors(model: FlexibleModel, Q: np.ndarray, y: np.ndarray,
     Args:
         model: The flexible model.
         Q: Joint samples (ns, nv), user convention [rad or m].
-        y: Design values (ny,) [kg].
+        y: Design values (ny,), each in its variable's unit.
         targets: Desired frequency histories; each target's ``mode`` must be in ``modes``.
         modes: 1-based mode numbers to compute.
 
@@ -373,6 +133,82 @@ def exact_errors(model: FlexibleModel, Q: np.ndarray, y: np.ndarray,
     return f, float(err.max())
 
 
+@dataclass(frozen=True)
+class _Candidate:
+    """One QP answer checked on the exact model."""
+
+    y: np.ndarray
+    taylor: TaylorModel | PiecewiseTaylor
+    problem: AssignmentQP | None
+    solution: QPSolution | None
+    exact: Verification
+    predicted: np.ndarray | None  # (ns, len(vmodes)) [Hz]
+    gap: float
+    cost: float
+    viol: float
+    floors_model: str = ""
+
+    def better_than(self, other: _Candidate) -> bool:
+        """Feasibility first (relative violation), then the exact cost."""
+        if self.viol > FLOOR_RTOL or other.viol > FLOOR_RTOL:
+            return self.viol < other.viol * (1 - 1e-9)
+        return self.cost < other.cost - 1e-12 * abs(other.cost)
+
+
+class _Checker:
+    """What every candidate is measured by: exact tracked frequencies, gap, cost, violation."""
+
+    def __init__(self, model, Q, trajectory, targets, vmodes, reference, build_kwargs):
+        self.model, self.Q, self.vmodes, self.reference = model, Q, list(vmodes), reference
+        self.tgt = target_matrix(targets, Q.shape[0])
+        self.tmodes = [t.mode for t in targets]
+        self.weights = np.array([t.weight for t in targets], dtype=float)
+        self.omega = trajectory.trapezoid_weights()
+        self.quantity = build_kwargs.get("quantity", "freq_hz")
+        self.floors = list(build_kwargs.get("floors", ()))
+        self.bands = list(build_kwargs.get("bands", ()))
+        self.budget = build_kwargs.get("mass_budget_kg")
+        self.didx: list[int] = list(range(model.ny))
+        self.checked = sorted({*self.tmodes, *(int(f[0]) for f in self.floors),
+                               *(int(b[0]) for b in self.bands)})
+
+    def verify(self, y) -> Verification:
+        return verify_tracked(self.model, self.Q, y, self.tgt, self.tmodes, self.vmodes,
+                              self.reference)
+
+    def by_mode(self, v: Verification) -> dict[int, np.ndarray]:
+        return {m: v.freq_hz[:, k] for k, m in enumerate(self.vmodes)}
+
+    def cost(self, v: Verification) -> float:
+        """The QP's cost (10) with the exact tracked frequencies."""
+        cols = [self.vmodes.index(m) for m in self.tmodes]
+        f = v.freq_hz[:, cols].T
+        if self.quantity == "eigval":
+            f, t = (2 * np.pi * f) ** 2, (2 * np.pi * self.tgt) ** 2
+        else:
+            t = self.tgt
+        return float(0.5 * np.sum(self.weights[:, None] * self.omega[None, :] * (f - t) ** 2))
+
+    def evaluate(self, y, taylor, problem, solution, floors_model="",
+                 exact: Verification | None = None) -> _Candidate:
+        v = self.verify(y) if exact is None else exact
+        pred = None if taylor is None else predicted_hz(taylor, self.Q, y, self.vmodes,
+                                                        self.quantity)
+        gap = 0.0 if pred is None else self.gap(pred, v)
+        mass = None
+        if self.budget is not None:
+            mass = budget_mass(self.model, y, self.didx)
+        viol = violation(self.by_mode(v), self.floors, self.bands, mass, self.budget)
+        return _Candidate(np.asarray(y, dtype=float), taylor, problem, solution, v, pred, gap,
+                          self.cost(v), viol, floors_model)
+
+    def gap(self, pred: np.ndarray, v: Verification) -> float:
+        cols = [self.vmodes.index(m) for m in self.checked]
+        p, e = pred[:, cols], v.freq_hz[:, cols]
+        ok = np.isfinite(p)
+        return float(np.max(np.abs(p[ok] / e[ok] - 1.0))) if ok.any() else 0.0
+
+
 def assign_frequencies(
     model: FlexibleModel,
     trajectory: Trajectory,
@@ -380,13 +216,15 @@ def assign_frequencies(
     *,
     y_before=None,
     refine: bool = False,
-    max_refinements: int = 5,
+    max_refinements: int = 8,
     report_modes: Sequence[int] = (),
     freq_before_hz: np.ndarray | None = None,
     progress: bool = False,
+    confirm_tol: float = CONFIRM_TOL,
+    target_tol: float | None = TARGET_TOL,
     **build_kwargs,
 ) -> AssignmentResult:
-    """Solve the assignment QP with ProxQP and verify it with the exact model.
+    """Solve the assignment QP, confirm it on the exact model, re-expand until it is.
 
     Args:
         model: The flexible model.
@@ -394,25 +232,31 @@ def assign_frequencies(
         targets: Desired frequency histories.
         y_before: Design the errors "before" refer to (default: lower bounds, i.e. no added
             mass).
-        refine: Re-expand at each new design and re-solve while the exact error improves.
+        refine: Keep re-expanding while the exact cost falls, also after the answer is
+            confirmed (without it the loop stops at the first confirmed answer).
         max_refinements: Most re-expansions.
         report_modes: Extra modes whose frequencies are reported (e.g. 2, 3, 4).
         freq_before_hz: Exact frequencies of ``y_before`` along the trajectory, (ns, modes)
-            with the modes in the result's order (targets, then ``report_modes``), when the
-            caller already has them (sweeps share them between cases).
-        progress: Show a progress bar of the stages (expansion, exact model before, QP,
-            exact verification, refinements) on stderr.
-        **build_kwargs: Passed to :func:`build_assignment`.
+            with the modes in the targets-then-``report_modes`` order, when the caller
+            already has them (sweeps share them between cases).
+        progress: Show a progress bar of the stages (expansion, exact model before, QPs and
+            their exact checks) on stderr.
+        confirm_tol: Largest relative difference between the answer's predicted and exact
+            frequencies (module docstring); > 0.
+        target_tol: The status is ``"target_missed"`` when the exact target error after is
+            above it (fraction; default :data:`TARGET_TOL`, 5 %; None: not checked).
+        **build_kwargs: Passed to :func:`~pinflex.assignment.build.build_assignment`.
 
     Raises:
-        AssignmentInfeasible: the constraints admit no design.
+        AssignmentInfeasible: the constraints admit no design (on the exact model too when
+            floors are involved).
+        ConfigurationError: ``confirm_tol`` or ``target_tol`` not positive.
     """
-    try:
-        from pinflex.progress import ProgressBar
-    except ImportError:  # the batch runner's bar, before the shared module exists
-        from pinflex.batch.runner import ProgressBar
-    bar = ProgressBar(4 + (max_refinements if refine else 0), "assignment stages",
-                      bool(progress))
+    if not (isinstance(confirm_tol, int | float) and confirm_tol > 0):
+        raise ConfigurationError(f"confirm_tol = {confirm_tol!r}: give a positive fraction")
+    if target_tol is not None and not (isinstance(target_tol, int | float) and target_tol > 0):
+        raise ConfigurationError(f"target_tol = {target_tol!r}: give a positive fraction")
+    bar = ProgressBar(4 + 2 * max_refinements, "assignment stages", bool(progress))
     t_start, c_start = time.perf_counter(), time.thread_time()
     timings: dict[str, float] = {}
     cpu: dict[str, float] = {}
@@ -423,15 +267,20 @@ def assign_frequencies(
 
     def now() -> tuple[float, float]:
         return time.perf_counter(), time.thread_time()
+
     Q = model.check_q(trajectory.q)
     check_trajectory_limits(model, trajectory)
     if y_before is None:
         y_before = np.array([d.lower for d in model.design])
     y_before = model.check_y(y_before)
-    modes = []
+    modes: list[int] = []
     for m in [t.mode for t in targets] + list(report_modes):
         if m not in modes:
             modes.append(int(m))
+    floors = list(build_kwargs.get("floors", ()))
+    bands = list(build_kwargs.get("bands", ()))
+    vmodes = modes + sorted(({int(f[0]) for f in floors} | {int(b[0]) for b in bands})
+                            - set(modes))
     tgt = target_matrix(targets, Q.shape[0])
     tmodes = [t.mode for t in targets]
     if freq_before_hz is not None:
@@ -440,22 +289,36 @@ def assign_frequencies(
             raise ConfigurationError(
                 f"freq_before_hz has shape {f_before.shape}; expected {(Q.shape[0], len(modes))}"
             )
+    quantity = build_kwargs.get("quantity", "freq_hz")
 
     t0 = now()
     problem, taylor = build_assignment(model, trajectory, targets, **build_kwargs)
     stage("expansion_and_build", t0)
     bar.update()
     reference = (taylor.q0, taylor.y0)
+    check = _Checker(model, Q, trajectory, targets, vmodes, reference, build_kwargs)
+    check.didx = list(taylor.design_idx)
     t0 = now()
     if freq_before_hz is None:
-        before = verify_tracked(model, Q, y_before, tgt, tmodes, modes, reference)
+        before = check.verify(y_before)
     else:  # given by the caller (a sweep shares them): taken as the tracked frequencies
-        cols = [modes.index(m) for m in tmodes]
+        extra = vmodes[len(modes):]
+        if extra:
+            fe = model.frequencies(Q, y_before, n_modes=max(extra))[:, [m - 1 for m in extra]]
+            f_before = np.hstack([f_before, fe])
+        cols = [vmodes.index(m) for m in tmodes]
         err = float(np.abs(f_before[:, cols].T / tgt - 1.0).max())
         before = Verification(None, f_before, f_before, err, err)
     stage("exact_before", t0)
     bar.update()
-    floors = list(build_kwargs.get("floors", ()))
+
+    def rebuild(floor_rows, tm, **kw):
+        kwargs = dict(build_kwargs, taylor=tm, **kw)
+        if floors:
+            kwargs["floors"] = floor_rows
+        return build_assignment(model, trajectory, targets, **kwargs)
+
+    # the first QP, on the whole design box
     t0 = now()
     floors_model = "taylor" if floors else ""
     try:
@@ -463,74 +326,150 @@ def assign_frequencies(
     except AssignmentInfeasible as exc:
         if not floors or exc.result is not None:
             raise _refusal(exc, problem) from None
-        problem, taylor, solution = _floors_on_exact(
-            model, trajectory, targets, build_kwargs, problem, taylor, y_before, exc)
+        problem, taylor, solution = floors_on_exact(
+            model, Q, lambda rows, tm: rebuild(rows, tm), problem, taylor, y_before, exc,
+            floors, quantity)
         floors_model = "taylor+exact"
     stage("qp", t0)
     bar.update()
-    y = _design_from(model, taylor, solution.dy)
     t0 = now()
-    after = verify_tracked(model, Q, y, tgt, tmodes, modes, reference)
+    cand = check.evaluate(_design_from(model, taylor, solution.dy), taylor, problem, solution,
+                          floors_model)
+    cand = _hold_floors(check, cand, rebuild)
     stage("exact_verification", t0)
     bar.update()
-    predicted = _predicted_error(problem, taylor, trajectory, targets, solution, build_kwargs)
+
+    # the design the model was expanded at: the loop's current point
+    didx = list(taylor.design_idx)
+    lo = np.array([model.design[j].lower for j in didx])
+    hi = np.array([model.design[j].upper for j in didx])
+    span = np.where(np.isfinite(hi - lo), hi - lo, np.maximum(np.abs(taylor.y0[didx]), 1.0))
+    current: _Candidate | None = None  # checked on the exact model only when needed
+    history: list[dict] = []
+    seen: list[_Candidate] = []
+    radius = None  # trust radius as a fraction of each variable's range; None: the whole box
     refinements = 0
-    while refine and refinements < max_refinements:
-        kwargs = dict(build_kwargs, y0=y, q0=taylor.q0, taylor=None)
-        t0 = now()
-        p2, tm2 = build_assignment(model, trajectory, targets, **kwargs)
-        try:
-            s2 = solve_assignment_qp(p2)
-        except AssignmentInfeasible:
+    solves_left = 3 * (max_refinements + 1) + 10  # accepted steps plus trust-region halvings
+    while True:
+        seen.append(cand)
+        solves_left -= 1
+        ok = cand.gap <= confirm_tol and cand.viol <= FLOOR_RTOL
+        entry = {"y": cand.y.tolist(), "gap": cand.gap, "cost": cand.cost,
+                 "violation": cand.viol, "accepted": True,
+                 "radius": None if radius is None else float(radius)}
+        history.append(entry)
+        if ok and not refine:
             break
-        y2 = _design_from(model, tm2, s2.dy)
-        v2 = verify_tracked(model, Q, y2, tgt, tmodes, modes, reference)
+        if current is None:
+            t0 = now()
+            y_exp = taylor.y0  # the first expansion design (no re-expansion yet)
+            current = check.evaluate(y_exp, None, None, None, exact=before if (
+                np.array_equal(y_exp, y_before) and freq_before_hz is None) else None)
+            stage("exact_verification", t0)
+        accept = cand.better_than(current)
+        entry["accepted"] = bool(accept)
+        step = float(np.max(np.abs(cand.y[didx] - current.y[didx]) / span))
+        if accept:
+            confirmed = cand.gap <= confirm_tol
+            stalled = (current.viol - cand.viol <= 0.01 * current.viol if cand.viol > FLOOR_RTOL
+                       else current.cost - cand.cost <= 1e-6 * abs(cand.cost))
+            current = cand
+            if confirmed and stalled and (refine or cand.viol > FLOOR_RTOL):
+                break
+            if refinements >= max_refinements:
+                break
+            t0 = now()
+            problem, taylor = _reexpand(model, trajectory, targets, build_kwargs, check,
+                                        current, taylor.q0, rebuild)
+            stage("refinement", t0)
+            refinements += 1
+            radius = None if radius is None else min(2.0 * radius, 1.0)
+        else:
+            radius = 0.5 * (step if radius is None else min(radius, step))
+            if radius < _XTOL or ok:
+                break
+        if solves_left <= 0:
+            break
+        t0 = now()
+        box = problem if radius is None else _trust(problem, radius * span)
+        try:
+            solution = solve_assignment_qp(box)
+        except AssignmentInfeasible:
+            restored = _restoration(box)  # floors out of reach here: the closest approach
+            if restored is None:
+                break
+            box = restored
+            try:
+                solution = solve_assignment_qp(box)
+            except AssignmentInfeasible:
+                break
+        cand = check.evaluate(_design_from(model, taylor, solution.dy), taylor, box, solution,
+                              "taylor+exact" if floors and refinements else floors_model)
+        cand = _hold_floors(check, cand, rebuild, trust=None if radius is None else
+                            radius * span)
         stage("refinement", t0)
         bar.update()
-        if v2.max_error >= after.max_error * (1 - 1e-9):
-            break
-        problem, taylor, solution, y, after = p2, tm2, s2, y2, v2
-        predicted = _predicted_error(problem, taylor, trajectory, targets, solution, kwargs)
-        refinements += 1
-    if floors:
-        problem, taylor, solution, y, after, corrected_exact = _floors_kept_exactly(
-            model, trajectory, targets, build_kwargs, problem, taylor, solution, y, after,
-            (tgt, tmodes, modes, reference))
-        if corrected_exact:
-            floors_model = "taylor+exact"
-    margin = floor_margins(model, Q, y, floors, reference) if floors else None
+    answer = _choose(seen, confirm_tol)
+    margin = (floor_margins(model, Q, answer.y, floors, reference) if floors else None)
     bar.total = bar.done
     bar.close()
     timings["total"] = time.perf_counter() - t_start
     cpu["total"] = time.thread_time() - c_start
+    after = answer.exact
     err_before, err_after = before.max_error, after.max_error
+    confirmed = answer.gap <= confirm_tol
+    constraints_met = answer.viol <= FLOOR_RTOL
+    worse = err_after > err_before * (1 + 1e-9)
+    status = outcome(confirmed=confirmed, constraints_met=constraints_met, improved=not worse,
+                     error_after=err_after, target_tol=target_tol)
+    pred = answer.predicted
+    assert pred is not None and answer.problem is not None and answer.solution is not None
+    cols = [vmodes.index(m) for m in tmodes]
+    predicted_err = float(np.max(np.abs(pred[:, cols].T / tgt - 1.0)))
     events = _target_events(before, after, tmodes)
-    _warn_outcome(model, y, before, after, events, tmodes, predicted, margin)
+    _warn_outcome(model, answer.y, before, after, events, tmodes, predicted_err, margin)
+    if not confirmed:
+        warnings.warn(
+            f"the exact model does not confirm the answer: its frequencies are up to "
+            f"{100 * answer.gap:.3g} % off the Taylor model's prediction (confirm_tol "
+            f"{100 * confirm_tol:.3g} %) after {refinements} re-expansions; the design is the "
+            "best one checked. Raise the order, give fewer or narrower design variables, or "
+            "start closer (expansion y0)",
+            PredictionNotConfirmed, stacklevel=2)
+    elif not constraints_met:
+        floors_hz = f"; the floors' exact margin is {margin:.4g} Hz" if margin is not None else ""
+        warnings.warn(
+            f"a floor, band or the mass budget is violated on the exact model by "
+            f"{100 * answer.viol:.3g} % of its limit at the closest design the confirmed "
+            f"Taylor steps reached{floors_hz}: out of reach of these design variables within "
+            "their bounds (widen them, add variables or lower the floors)",
+            FloorsNotMet, stacklevel=2)
     return AssignmentResult(
-        found=bool(solution.found),
-        design={d.name: float(v) for d, v in zip(model.design, y)},
-        y=y,
+        found=bool(answer.solution.found),
+        design={d.name: float(v) for d, v in zip(model.design, answer.y)},
+        y=answer.y,
         y_before=y_before,
-        modes=tuple(modes),
+        modes=tuple(vmodes),
         targets_hz=tgt,
         freq_before_hz=before.freq_hz,
         freq_after_hz=after.freq_hz,
         max_error_before=err_before,
         max_error_after=err_after,
-        predicted_max_error_after=predicted,
-        problem=problem,
-        solution=solution,
-        taylor=taylor,
+        predicted_max_error_after=predicted_err,
+        problem=answer.problem,
+        solution=answer.solution,
+        taylor=answer.taylor,
         refinements=refinements,
         timings_s=timings,
         cpu_timings_s=cpu,
         settings={
             "mass_budget_kg": build_kwargs.get("mass_budget_kg"),
             "floors": [(int(m), float(f) if np.ndim(f) == 0 else
-                        np.asarray(f, dtype=float).tolist())
-                       for m, f in build_kwargs.get("floors", ())],
-            "bands": [(int(m), float(a), float(b)) for m, a, b in build_kwargs.get("bands", ())],
-            "quantity": build_kwargs.get("quantity", "freq_hz"),
+                        np.asarray(f, dtype=float).tolist()) for m, f in floors],
+            "bands": [(int(m), float(a), float(b)) for m, a, b in bands],
+            "quantity": quantity,
+            "confirm_tol": float(confirm_tol),
+            "target_tol": None if target_tol is None else float(target_tol),
         },
         freq_before_sorted_hz=before.sorted_hz,
         freq_after_sorted_hz=after.sorted_hz,
@@ -538,10 +477,119 @@ def assign_frequencies(
         max_error_after_sorted=after.max_error_sorted,
         improved=bool(err_after < err_before),
         events=events,
-        floors_model=floors_model,
+        floors_model=answer.floors_model,
         floor_margin_hz=margin,
         joints=model.joint_labels(),
+        predicted_hz=pred,
+        prediction_gap=answer.gap,
+        confirmed=confirmed,
+        constraints_met=constraints_met,
+        status=status,
+        iterations=tuple(history),
     )
+
+
+def _choose(seen: list[_Candidate], confirm_tol: float) -> _Candidate:
+    """The best confirmed candidate (feasibility, then cost); else the best of all."""
+    confirmed = [c for c in seen if c.gap <= confirm_tol]
+    pool = confirmed or seen
+    best = pool[0]
+    for c in pool[1:]:
+        if c.better_than(best):
+            best = c
+    return best
+
+
+def _trust(problem: AssignmentQP, rho: np.ndarray) -> AssignmentQP:
+    """The QP with its box cut to ``|δy| <= rho``."""
+    return dataclasses.replace(problem, lower=np.maximum(problem.lower, -rho),
+                               upper=np.minimum(problem.upper, rho))
+
+
+def _restoration(problem: AssignmentQP) -> AssignmentQP | None:
+    """The QP with its floor rows lowered by the least shortfall the polynomial can reach.
+
+    When no step in the (trust) box meets the floors on the polynomial, the step that comes
+    closest is wanted (a feasibility-restoration step): the linear program ``max t`` subject
+    to ``floor rows − t >= l`` and the other rows finds the shortfall ``t* < 0``, and the
+    floor rows are lowered by it. None when the other rows alone are infeasible.
+    """
+    from scipy.optimize import linprog
+
+    groups = np.array(problem.constraint_groups)
+    floor = groups == "floor"
+    if not floor.any():
+        return None
+    ny = problem.ny
+    scale = np.max(np.abs(problem.C[floor]), axis=1)
+    scale = np.where(scale > 0, scale, 1.0)
+    rows, rhs = [], []
+    Cf, lf = problem.C[floor] / scale[:, None], problem.l[floor] / scale
+    rows.append(np.hstack([-Cf, np.ones((Cf.shape[0], 1))]))  # t - C dy <= -l
+    rhs.append(-lf)
+    other = ~floor
+    Co, lo, uo = problem.C[other], problem.l[other], problem.u[other]
+    for sign, bound in ((1.0, uo), (-1.0, lo)):
+        ok = np.isfinite(bound)
+        if ok.any():
+            rows.append(np.hstack([sign * Co[ok], np.zeros((ok.sum(), 1))]))
+            rhs.append(sign * bound[ok])
+    bounds = [(None if not np.isfinite(a) else a, None if not np.isfinite(b) else b)
+              for a, b in zip(problem.lower, problem.upper)] + [(None, 0.0)]
+    A_eq = np.hstack([problem.A, np.zeros((problem.A.shape[0], 1))]) if problem.A.size else None
+    out = linprog(np.r_[np.zeros(ny), -1.0], A_ub=np.vstack(rows), b_ub=np.concatenate(rhs),
+                  A_eq=A_eq, b_eq=problem.b if problem.A.size else None, bounds=bounds,
+                  method="highs")
+    if out.status != 0:
+        return None
+    shortfall = float(out.x[-1])
+    lowered = problem.l.copy()
+    lowered[floor] += (shortfall - 1e-9 * max(1.0, abs(shortfall))) * scale
+    return dataclasses.replace(problem, l=lowered)
+
+
+def _reexpand(model, trajectory, targets, build_kwargs, check: _Checker, at: _Candidate, q0,
+              rebuild):
+    """Expand again at an accepted design; floors shifted to the exact values there."""
+    _, tm = build_assignment(model, trajectory, targets,
+                             **dict(build_kwargs, y0=at.y, q0=q0, taylor=None))
+    rows = list(build_kwargs.get("floors", ()))
+    if rows:
+        rows = corrected_floors(model, check.Q, tm, at.y, rows, check.quantity,
+                                check.reference, exact_hz=check.by_mode(at.exact))
+    return rebuild(rows, tm, y0=at.y, q0=q0)
+
+
+def _hold_floors(check: _Checker, cand: _Candidate, rebuild, trust=None) -> _Candidate:
+    """Shift floor rows by the exact-minus-predicted offsets at a candidate that breaks them.
+
+    The polynomial meets the floors but the exact model does not: the floors are shifted so
+    that the same Taylor model is exact at the candidate (plus a hair of margin) and the QP
+    solved again, at most six times, while the exact violation shrinks.
+    """
+    if not check.floors or cand.viol <= FLOOR_RTOL or cand.taylor is None:
+        return cand
+    best = cand
+    for _ in range(6):
+        rows = [(m, np.asarray(f) + 1e-6 * np.abs(np.asarray(f)))
+                for m, f in corrected_floors(check.model, check.Q, cand.taylor, best.y,
+                                             check.floors, check.quantity, check.reference,
+                                             exact_hz=check.by_mode(best.exact))]
+        problem, tm = rebuild(rows, cand.taylor)
+        if trust is not None:
+            problem = _trust(problem, trust)
+        try:
+            solution = solve_assignment_qp(problem)
+        except AssignmentInfeasible:
+            break
+        new = check.evaluate(_design_from(check.model, tm, solution.dy), tm, problem, solution,
+                             "taylor+exact")
+        if not new.viol < best.viol:
+            break
+        best = new
+        if new.viol <= FLOOR_RTOL:
+            break
+    return best
 
 
 def _refusal(exc: AssignmentInfeasible, problem) -> AssignmentInfeasible:
@@ -552,105 +600,6 @@ def _refusal(exc: AssignmentInfeasible, problem) -> AssignmentInfeasible:
     text = ("refused by the partially linear Taylor model (floors/bands on the polynomial)"
             if model_based else "refused by the box and linear constraints (exact)")
     return AssignmentInfeasible(f"{exc} [{text}]", exc.problem, exc.result, refused_by=who)
-
-
-def _floors_on_exact(model, trajectory, targets, build_kwargs, problem, taylor, y_before, exc):
-    """Re-solve a QP whose polynomial floors were infeasible with exact-corrected floors."""
-    Q = model.check_q(trajectory.q)
-    reference = (taylor.q0, taylor.y0)
-    floors = list(build_kwargs["floors"])
-    best = None
-    for y in exact_floor_candidates(model, problem, taylor, y_before):
-        m = floor_margins(model, Q, y, floors, reference)
-        if best is None or m > best[1]:
-            best = (y, m)
-    if best is None or best[1] < 0:
-        detail = ("no design meets the box and linear constraints" if best is None else
-                  f"the best of the checked designs (y0, the design before and the box "
-                  f"corners), y = {np.round(best[0], 6).tolist()}, misses a floor by "
-                  f"{-best[1]:.4g} Hz")
-        raise AssignmentInfeasible(
-            f"{exc} [refused by the partially linear Taylor model and confirmed on the exact "
-            f"model: {detail}]", problem, None, refused_by="exact") from None
-    quantity = build_kwargs.get("quantity", "freq_hz")
-    y_star = best[0]
-    solution = None
-    for _ in range(4):
-        corrected = _corrected_floors(model, Q, taylor, y_star, floors, quantity, reference)
-        kwargs = dict(build_kwargs, floors=corrected, taylor=taylor)
-        problem, taylor = build_assignment(model, trajectory, targets, **kwargs)
-        solution = solve_assignment_qp(problem)
-        y = _design_from(model, taylor, solution.dy)
-        if floor_margins(model, Q, y, floors, reference) >= -1e-9 * max(
-                float(np.max(np.abs(np.asarray(f, dtype=float)))) for _, f in floors):
-            break
-        y_star = y
-    warnings.warn(
-        "the partially linear Taylor model declared the frequency floors infeasible, but the "
-        f"exact model meets them at y = {np.round(best[0], 6).tolist()} (margin "
-        f"{best[1]:.4g} Hz); the floors were corrected by the exact-minus-predicted offsets "
-        "and the QP solved again (floors_model = 'taylor+exact')",
-        AssignmentWarning,
-        stacklevel=3,
-    )
-    return problem, taylor, solution
-
-
-def _floors_kept_exactly(model, trajectory, targets, build_kwargs, problem, taylor, solution,
-                         y, after, verify_args):
-    """Re-solve with exact-corrected floors when only the polynomial meets them.
-
-    Section variables are where the partially linear model is least accurate: the floors are
-    shifted by the exact-minus-predicted offsets at the answer and the QP solved again.
-    """
-    Q = model.check_q(trajectory.q)
-    tgt, tmodes, modes, reference = verify_args
-    floors = list(build_kwargs["floors"])
-    quantity = build_kwargs.get("quantity", "freq_hz")
-    tol = 1e-9 * max(float(np.max(np.abs(np.asarray(f, dtype=float)))) for _, f in floors)
-    if floor_margins(model, Q, y, floors, reference) >= -tol:
-        return problem, taylor, solution, y, after, False
-    y_star, changed = y, False
-    for _ in range(6):
-        corrected = [(m, np.asarray(f) + 1e-6 * np.abs(np.asarray(f)))  # a hair of margin
-                     for m, f in _corrected_floors(model, Q, taylor, y_star, floors, quantity,
-                                                   reference)]
-        kwargs = dict(build_kwargs, floors=corrected, taylor=taylor)
-        p3, tm3 = build_assignment(model, trajectory, targets, **kwargs)
-        try:
-            s3 = solve_assignment_qp(p3)
-        except AssignmentInfeasible:
-            break
-        problem, taylor, solution, y = p3, tm3, s3, _design_from(model, tm3, s3.dy)
-        changed = True
-        if floor_margins(model, Q, y, floors, reference) >= -tol:
-            break
-        y_star = y
-    if changed:
-        after = verify_tracked(model, Q, y, tgt, tmodes, modes, reference)
-    return problem, taylor, solution, y, after, changed
-
-
-def _corrected_floors(model, Q, taylor, y_star, floors, quantity, reference):
-    """Floors shifted so that the polynomial equals the exact tracked model at ``y_star``."""
-    modes = tuple(sorted({int(m) for m, _ in floors}))
-    tr = verify_tracked(model, Q, y_star, np.ones((1, Q.shape[0])), [modes[0]], modes,
-                        reference).tracking
-    l0, L = taylor.linear_parts(Q, quantity=quantity)
-    didx = list(taylor.design_idx)
-    dy = y_star[didx] - taylor.y0[didx]
-    out = []
-    for m, fmin in floors:
-        k = taylor.modes.index(int(m))
-        pred = l0[:, k] + L[:, k, :] @ dy
-        exact_f = tr.freq_hz[:, modes.index(int(m))]
-        fmin = np.broadcast_to(np.asarray(fmin, dtype=float), exact_f.shape)
-        if quantity == "eigval":
-            lam = (2 * np.pi * fmin) ** 2 - ((2 * np.pi * exact_f) ** 2 - pred)
-            out.append((int(m), np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)))
-        else:
-            out.append((int(m), fmin - (exact_f - pred)))
-    return out
 
 
 def _target_events(before: Verification, after: Verification, target_modes) -> tuple:
@@ -695,13 +644,6 @@ def _warn_outcome(model, y, before, after, events, target_modes, predicted, marg
             AssignmentNotImproved,
             stacklevel=3,
         )
-    if margin is not None and margin < 0:
-        warnings.warn(
-            f"a frequency floor is violated on the exact model by {-margin:.4g} Hz (tracked "
-            "modes) although the polynomial meets it",
-            AssignmentWarning,
-            stacklevel=3,
-        )
     at_bound = [d.name for d, v in zip(model.design, y)
                 if v <= d.lower + 1e-9 or v >= d.upper - 1e-9]
     if err_after > 0.05 and at_bound:
@@ -721,17 +663,3 @@ def _design_from(model: FlexibleModel, taylor: TaylorModel | PiecewiseTaylor, dy
     lo = np.array([d.lower for d in model.design])
     hi = np.array([d.upper for d in model.design])
     return np.clip(y, lo, hi)  # the QP keeps the box to 1e-10; clip round-off only
-
-
-def _predicted_error(problem, taylor, trajectory, targets, solution, kwargs) -> float:
-    quantity = kwargs.get("quantity", "freq_hz")
-    Q = trajectory.q
-    l0, L = taylor.linear_parts(Q, quantity=quantity)
-    tgt = target_matrix(targets, Q.shape[0])
-    worst = 0.0
-    for t, row in zip(targets, tgt):
-        k = taylor.modes.index(t.mode)
-        pred = l0[:, k] + L[:, k, :] @ solution.dy
-        f = pred if quantity == "freq_hz" else np.sqrt(np.maximum(pred, 0)) / (2 * np.pi)
-        worst = max(worst, float(np.max(np.abs(f / row - 1))))
-    return worst

@@ -206,18 +206,19 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
     target = np.full((ns, len(modes)), np.nan)
     for k, m in enumerate(target_modes):
         target[:, modes.index(m)] = result.targets_hz[k]
-    # Taylor prediction at the answer
+    # the Taylor model's prediction at the answer: the array the result carries (the same
+    # function gives predicted_max_error_after and the confirmation gap)
+    from pinflex.assignment.build import budget_mass, predicted_hz
+
     tm = result.taylor
     didx = list(tm.design_idx)
     dy = np.asarray(result.y)[didx] - tm.y0[didx]
-    l0, L = tm.linear_parts(Q, quantity=quantity)
-    pred_q = l0 + np.einsum("kmj,j->km", L, dy)
-    if quantity == "eigval":
-        pred_q = np.sqrt(np.maximum(pred_q, 0.0)) / (2.0 * np.pi)
-    predicted = np.full((ns, len(modes)), np.nan)
-    for c, m in enumerate(modes):
-        if m in tm.modes:
-            predicted[:, c] = pred_q[:, tm.modes.index(m)]
+    predicted = predicted_hz(tm, Q, result.y, modes, quantity)
+    if result.predicted_hz is not None:
+        given = list(result.modes)
+        for c, m in enumerate(modes):
+            if m in given:
+                predicted[:, c] = result.predicted_hz[:, given.index(m)]
     roles = []
     for m in modes:
         r = [name for name, ms in (("target", target_modes), ("floor", [f[0] for f in floors]),
@@ -227,7 +228,7 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
     names = [d.name for d in model.design]
     y = np.asarray(result.y)
     if budget is not None:
-        total = float(np.sum(y[didx]))
+        total = float(budget_mass(model, y, didx))
         slack = float(budget) - total
         constraints.append(dict(name="mass budget", kind="budget", value=total,
                                 limit=float(budget), slack=slack,

@@ -58,6 +58,8 @@ class SizingResult:
         history: Per iteration ``(y, mass_kg, exact margin_hz)``.
         timings_s: Compute time of expansions, steps and exact verification [s].
         joints: Joint conditions of the model.
+        status: ``"met"`` when every floor (and the budget) holds on the exact model, else
+            ``"floors_unmet"`` (the command line then exits with 3).
     """
 
     design: dict[str, float]
@@ -74,6 +76,12 @@ class SizingResult:
     history: tuple = ()
     timings_s: dict[str, float] = field(default_factory=dict)
     joints: dict[str, str] = field(default_factory=dict)
+    status: str = "met"
+
+    @property
+    def ok(self) -> bool:
+        """Whether every floor holds on the exact model (``status == "met"``)."""
+        return self.status == "met"
 
     @property
     def added_mass_kg(self) -> float:
@@ -152,6 +160,7 @@ def size_for_floors(
     tol_hz: float = 1e-6,
     mass_budget_kg: float | None = None,
     safety: float = 1e-5,
+    progress: bool = False,
 ) -> SizingResult:
     """Least design mass with every floored mode above its floor along a trajectory.
 
@@ -171,8 +180,24 @@ def size_for_floors(
         mass_budget_kg: Optional upper bound of the design mass [kg].
         safety: Relative margin added to the floors in each step (the polynomial's error
             grows away from its expansion point; the exact check decides).
+        progress: Show a progress bar of the steps on stderr.
+
+    Raises:
+        ConfigurationError: No floor, no design variable, or a setting out of range.
+        InvalidTrajectory: The trajectory does not have one column per joint.
     """
+    from pinflex.assignment.targets import check_trajectory_limits
+    from pinflex.progress import ProgressBar
+
+    for name, value, low in (("step_fraction", step_fraction, 0.0), ("xtol", xtol, 0.0),
+                             ("tol_hz", tol_hz, 0.0), ("safety", safety, -1.0)):
+        if not (isinstance(value, int | float) and np.isfinite(value) and value > low):
+            raise ConfigurationError(f"{name} = {value!r}: give a number above {low:g}")
+    if isinstance(max_expansions, bool) or not isinstance(max_expansions, int) or \
+            max_expansions < 1:
+        raise ConfigurationError(f"max_expansions = {max_expansions!r}: give a whole number >= 1")
     t_all = time.perf_counter()
+    check_trajectory_limits(model, trajectory)
     Q = np.atleast_2d(model.check_q(trajectory.q))
     floors = tuple((int(m), float(f)) for m, f in floors)
     if not floors:
@@ -203,6 +228,7 @@ def size_for_floors(
     rho = None  # trust radius per variable (absolute units)
     tm = None
     solves = 0
+    bar = ProgressBar(4 * max_expansions, "sizing steps", bool(progress))
     while expansions < max_expansions and solves < 4 * max_expansions:
         if tm is None:
             t0 = time.perf_counter()
@@ -224,6 +250,7 @@ def size_for_floors(
         dy = _solve_step(model, y, didx, predict, fmin * (1.0 + safety) + correction, lo_b,
                          hi_b, rho, span, mass_budget_kg)
         solves += 1
+        bar.update()
         t["step_solve"] = t.get("step_solve", 0.0) + time.perf_counter() - t0
         y_new = y.copy()
         y_new[didx] = np.clip(y[didx] + dy, lo_b, hi_b)
@@ -248,7 +275,11 @@ def size_for_floors(
         if (accept and moved < xtol) or np.all(rho < xtol * span):
             if float(np.min(f_now - fmin[None, :])) >= -tol_hz:
                 break
+    bar.total = bar.done
+    bar.close()
     margin = float(np.min(f_now - fmin[None, :]))
+    over_budget = mass_budget_kg is not None and design_mass(model, y) > mass_budget_kg * (
+        1 + 1e-9)
     if margin < -tol_hz:
         import warnings
 
@@ -265,4 +296,5 @@ def size_for_floors(
         freq_start_hz=f_start, margin_hz=margin, feasible=bool(margin >= -tol_hz),
         expansions=expansions, history=tuple(history), timings_s=t,
         joints=model.joint_labels(),
+        status="met" if margin >= -tol_hz and not over_budget else "floors_unmet",
     )

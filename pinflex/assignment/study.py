@@ -26,7 +26,9 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped with 
     order = 4                      # 0 to 12 (pinflex.resources.MAX_TAYLOR_ORDER)
     quantity = "freq_hz"           # or "eigval"
 
-    [[targets]]
+    design = ["m1", "m2"]          # the variables to choose (default: all)
+
+    [[targets]]                    # pinflex assign
     mode = 1
     freq_hz = 190.0
     weight = 1.0
@@ -40,6 +42,18 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped with 
     baseline = { m1 = 0.0, m2 = 0.0 }   # the "before" design (default: lower bounds)
     refine = false
     report_modes = [2, 3, 4]
+    confirm_tol = 0.005            # the exact model must confirm the prediction this close
+    target_tol = 0.05              # largest exact target error for the status "met"
+    max_refinements = 8
+
+    [sizing]                       # pinflex size: least design mass under the floors
+    step_fraction = 0.5
+    max_expansions = 30
+    tol_hz = 1e-6
+
+``pinflex assign`` needs ``[[targets]]``; ``pinflex size`` needs ``[constraints].floors`` and
+uses ``[expansion]`` (``q0``, ``y0`` as the start, ``order``, ``design``), the mass budget
+and ``[sizing]``.
 """
 
 from __future__ import annotations
@@ -47,12 +61,14 @@ from __future__ import annotations
 import functools
 import tomllib
 from dataclasses import dataclass, field
+from typing import Any
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
-from pinflex.assignment.driver import Target, assign_frequencies
+from pinflex.assignment.driver import assign_frequencies
+from pinflex.assignment.targets import Target
 from pinflex.assignment.study_schema import check_against_model, check_study
 from pinflex.description.builtin import builtin_path
 from pinflex.erls import FlexibleModel
@@ -104,6 +120,11 @@ class AssignmentConfig:
     values: dict | None = None
     taylor_tol: float | None = None
     points_tol: float | None = None
+    design: list[str] | None = None
+    confirm_tol: float | None = None
+    target_tol: float | None = None
+    max_refinements: int | None = None
+    sizing: dict = field(default_factory=dict)
 
     def build_model(self) -> FlexibleModel:
         """The flexible model of the study."""
@@ -204,7 +225,7 @@ def config_from_data(data: dict, folder: Path, source: str = "<study>") -> Assig
         planar=data.get("planar", False),
         trajectory=data.get("trajectory", {"builtin": "benchmark_a"}),
         targets=[Target(t["mode"], t["freq_hz"], float(t.get("weight", 1.0)))
-                 for t in data["targets"]],
+                 for t in data.get("targets", [])],
         q0=np.array(exp["q0"], dtype=float) if "q0" in exp else None,
         y0=exp.get("y0"),
         order=exp.get("order", 4),
@@ -219,6 +240,11 @@ def config_from_data(data: dict, folder: Path, source: str = "<study>") -> Assig
         folder=folder,
         joints=data.get("joints", "annotated"),
         values=dict(data["values"]) if "values" in data else None,
+        design=list(exp["design"]) if "design" in exp else None,
+        confirm_tol=opts.get("confirm_tol"),
+        target_tol=opts.get("target_tol"),
+        max_refinements=opts.get("max_refinements"),
+        sizing=dict(data.get("sizing", {})),
     )
 
 
@@ -239,9 +265,14 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
     Returns:
         ``(model, trajectory, result)``.
     """
+    if not cfg.targets:
+        raise StudyError("the study has no [[targets]] to assign (for the least "
+                         "design mass under [constraints].floors, run pinflex size)")
     model = cfg.build_model() if model is None else model
     traj = cfg.build_trajectory(model) if trajectory is None else trajectory
     baseline = model.check_y(cfg.baseline) if cfg.baseline is not None else None
+    loop: dict[str, Any] = {k: v for k, v in (("confirm_tol", cfg.confirm_tol), ("target_tol", cfg.target_tol),
+                              ("max_refinements", cfg.max_refinements)) if v is not None}
     result = assign_frequencies(
         model, traj, cfg.targets,
         y_before=baseline, refine=cfg.refine, taylor=taylor, freq_before_hz=freq_before_hz,
@@ -250,6 +281,31 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
         q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
         order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,
         floors=cfg.floors, bands=cfg.bands, taylor_tol=cfg.taylor_tol,
-        points_tol=cfg.points_tol,
+        points_tol=cfg.points_tol, design=cfg.design, **loop,
     )
+    return model, traj, result
+
+
+def run_sizing(cfg: AssignmentConfig, *, model=None, trajectory=None, progress: bool = False):
+    """Least design mass under the study's floors (:func:`~pinflex.assignment.sizing.
+    size_for_floors`): ``[constraints].floors`` and ``mass_budget_kg``, ``[expansion]``
+    ``q0``, ``y0`` (the start), ``order`` and ``design``, and the ``[sizing]`` table.
+
+    Returns:
+        ``(model, trajectory, sizing_result)``.
+
+    Raises:
+        StudyError: The study has no floors.
+    """
+    from pinflex.assignment.sizing import size_for_floors
+
+    if not cfg.floors:
+        raise StudyError("pinflex size needs [constraints].floors = "
+                         "[{ mode = 1, freq_hz = ... }] (the frequencies to keep above)")
+    model = cfg.build_model() if model is None else model
+    traj = cfg.build_trajectory(model) if trajectory is None else trajectory
+    result = size_for_floors(
+        model, traj, cfg.floors, design=cfg.design,
+        y_start=model.check_y(cfg.y0) if cfg.y0 is not None else None, q0=cfg.q0,
+        order=cfg.order, mass_budget_kg=cfg.mass_budget_kg, progress=progress, **cfg.sizing)
     return model, traj, result

@@ -33,7 +33,8 @@ class Key:
         kind: 'str', 'bool', 'int', 'float', 'floats' (array of numbers), 'ints', 'mapping'
             (table of name = number), 'table', 'tables' (array of tables), 'points' (array of
             [x, y, z]), 'float_or_floats', 'orientation' ("keep", "free" or [r, p, y]),
-            'foreign_table' (a table whose keys another module checks).
+            'foreign_table' (a table whose keys another module checks), 'strs' (array of
+            strings).
         required: Whether the key must be present.
         gt, ge, le: Bounds of numbers (of every entry for arrays and mappings).
         choices: Allowed strings.
@@ -101,8 +102,9 @@ STUDY: dict[str, Key] = {
         "y0": Key("mapping", ge=0.0, doc="expansion design {name = kg}"),
         "order": Key("int", ge=0, le=MAX_TAYLOR_ORDER, doc="Taylor order"),
         "quantity": Key("str", choices=("freq_hz", "eigval"), doc="expanded quantity"),
+        "design": Key("strs", doc="design variables to choose (default: all)"),
     }),
-    "targets": Key("tables", required=True, min_items=1, doc="wanted frequencies", keys={
+    "targets": Key("tables", min_items=1, doc="wanted frequencies (pinflex assign)", keys={
         "mode": _MODE,
         "freq_hz": Key("float_or_floats", required=True, gt=0.0,
                        doc="target [Hz], constant or one per sample"),
@@ -124,6 +126,19 @@ STUDY: dict[str, Key] = {
         "baseline": Key("mapping", ge=0.0, doc="the 'before' design {name = kg}"),
         "refine": Key("bool", doc="re-expand at the answer and solve again"),
         "report_modes": Key("ints", ge=1, doc="further modes to report"),
+        "confirm_tol": Key("float", gt=0.0, le=1.0, doc="largest relative difference "
+                           "between the answer's predicted and exact frequencies (default "
+                           "0.005)"),
+        "target_tol": Key("float", gt=0.0, doc="largest exact target error for the "
+                          "status 'met' (default 0.05)"),
+        "max_refinements": Key("int", ge=0, le=100, doc="most re-expansions (default 8)"),
+    }),
+    "sizing": Key("table", doc="least design mass under the floors (pinflex size)", keys={
+        "step_fraction": Key("float", gt=0.0, le=1.0, doc="trust region as a fraction of "
+                             "the estimated radius (default 0.5)"),
+        "max_expansions": Key("int", ge=1, le=1000, doc="most re-expansions (default 30)"),
+        "tol_hz": Key("float", gt=0.0, doc="floor tolerance on the exact model [Hz] "
+                      "(default 1e-6)"),
     }),
 }
 
@@ -191,6 +206,11 @@ class _StudyChecker:
                 hint = " (a TOML boolean is written without quotes)" if isinstance(
                     value, str) else ""
                 self.add(where, f"expected true or false, got {_type_name(value)}{hint}")
+        elif kind == "strs":
+            if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+                self.add(where, f"expected an array of strings, got {_type_name(value)}")
+            elif not value:
+                self.add(where, "must not be empty")
         elif kind == "str":
             if not isinstance(value, str):
                 self.add(where, f"expected a string, got {_type_name(value)}")
@@ -337,6 +357,10 @@ def check_against_model(data: dict, model, where_robot: str = "robot") -> list[P
     exp = data.get("expansion", {})
     if isinstance(exp, dict):
         _design_names(exp.get("y0"), names, "expansion.y0", model, add)
+        chosen = exp.get("design")
+        if isinstance(chosen, list):
+            _design_names({n: None for n in chosen if isinstance(n, str)}, names,
+                          "expansion.design", model, add)
         q0 = exp.get("q0")
         if isinstance(q0, list) and len(q0) != nv:
             add("expansion.q0", f"has {len(q0)} values; the robot has {nv} moving joints "

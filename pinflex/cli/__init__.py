@@ -6,7 +6,9 @@ returning the exit status). A new subcommand is a new module and one line in
 :data:`SUBCOMMANDS`. A run imports only the module of the subcommand it names (start-up
 stays that of the work asked for); ``pinflex --help`` and unknown names load them all.
 
-Exit status: 0 on success; 2 for a user error (a :class:`~pinflex.exceptions.PinflexError`,
+Exit status: 0 on success; 3 when ``assign`` or ``size`` ran but the exact model does not meet
+the targets, floors or constraints (:data:`pinflex.assignment.result.EXIT_NOT_MET`); 2 for a
+user error (a :class:`~pinflex.exceptions.PinflexError`,
 reported as one line ``pinflex: error: ...`` on stderr, or an argparse usage error); 1 for an
 internal error (any other exception, reported as one line; ``--debug`` shows the traceback);
 130 when interrupted; 141 (as after SIGPIPE) without a word when the reader of standard output
@@ -26,6 +28,7 @@ SUBCOMMANDS: list[str] = [
     "path",
     "export",
     "assign",
+    "size",
     "demo",
     "view",
     "batch",

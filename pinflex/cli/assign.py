@@ -11,7 +11,13 @@ from pinflex.cli.common import add_model_arguments, parse_values
 
 def add_parser(sub) -> None:
     """Register the ``assign`` subcommand on an ``argparse`` subparsers object."""
-    p = sub.add_parser("assign", help="assign eigenfrequencies along a trajectory (TOML study)")
+    p = sub.add_parser(
+        "assign", help="assign eigenfrequencies along a trajectory (TOML study)",
+        description="Assign eigenfrequencies along a trajectory: the QP of the Taylor model, "
+        "confirmed on the exact model and re-expanded until it is. Exit status: 0 when the "
+        "exact model meets everything (status 'met'), 3 when it does not (prediction not "
+        "confirmed, a floor, band or budget violated, no improvement, target error above "
+        "--target-tol, or no feasible design), 2 for an input error.")
     p.add_argument("config", help="TOML study file (see pinflex.assignment.study)")
     p.add_argument("--out", default=None,
                    help="folder for the charts, assignment.csv and assignment.json")
@@ -37,6 +43,12 @@ def add_parser(sub) -> None:
                    "orders' terms) meets TOL at every "
                    "sample at y0; each sample's QP rows come from its segment's model; reports "
                    "the points, the order, the estimate and the exact error of the cover")
+    p.add_argument("--confirm-tol", type=float, default=None, metavar="TOL",
+                   help="largest relative difference between the answer's predicted and exact "
+                   "frequencies (default: the study's, else 0.005)")
+    p.add_argument("--target-tol", type=float, default=None, metavar="TOL",
+                   help="largest exact target error for the status 'met' (default: the "
+                   "study's, else 0.05)")
     add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_assign)
 
@@ -61,6 +73,11 @@ def summary(result, total_s: float) -> dict:
         "timings_s": result.timings_s,
         "total_time_s": total_s,
         "joints": dict(result.joints),
+        "status": result.status,
+        "confirmed": result.confirmed,
+        "prediction_gap": result.prediction_gap,
+        "constraints_met": result.constraints_met,
+        "iterations": [dict(it) for it in result.iterations],
         "taylor_order": int(result.taylor.order),
         "taylor_order_choice": _order_choice(result.taylor),
         "taylor_points_choice": _points_choice(result.taylor),
@@ -132,9 +149,29 @@ def cmd_assign(args: argparse.Namespace) -> int:
             raise ConfigurationError("give --tol (one expansion point, order by tolerance) or "
                                      "--points-tol (expansion points by tolerance), not both")
         cfg.points_tol = args.points_tol
+    for key in ("confirm_tol", "target_tol"):
+        value = getattr(args, key)
+        if value is not None:
+            if not value > 0:
+                from pinflex.exceptions import ConfigurationError
+
+                raise ConfigurationError(f"--{key.replace('_', '-')} {value}: give a positive "
+                                         "fraction")
+            setattr(cfg, key, value)
     import sys
 
-    model, traj, result = run_config(cfg, progress=not args.no_progress and sys.stderr.isatty())
+    from pinflex.assignment.result import EXIT_NOT_MET
+    from pinflex.exceptions import AssignmentInfeasible
+
+    try:
+        model, traj, result = run_config(cfg, progress=not args.no_progress
+                                         and sys.stderr.isatty())
+    except AssignmentInfeasible as exc:
+        if args.json:
+            print(json.dumps({"status": "infeasible", "error": str(exc),
+                              "refused_by": exc.refused_by}))
+        print(f"pinflex: no feasible design: {exc}", file=sys.stderr)
+        return EXIT_NOT_MET
     total = time.perf_counter() - t0
     data = assignment_data(model, traj, result)
     charts, files = [], []
@@ -152,9 +189,10 @@ def cmd_assign(args: argparse.Namespace) -> int:
     out["files"] = files
     out["html"] = html
     out.update(data.to_dict())
+    code = 0 if result.ok else EXIT_NOT_MET
     if args.json:
         print(json.dumps(out))
-        return 0
+        return code
     print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
     print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
     choice = result.taylor.order_choice
@@ -178,7 +216,9 @@ def cmd_assign(args: argparse.Namespace) -> int:
     if result.floors_model:
         print(f"floors enforced on: {result.floors_model}; exact margin "
               f"{result.floor_margin_hz:.4g} Hz")
-    print(f"QP: {result.solution.iterations} iterations, {1e3 * result.solution.time_s:.3f} ms; "
+    print(f"status: {result.status_text()}")
+    print(f"QP: {result.solution.iterations} iterations, {1e3 * result.solution.time_s:.3f} ms "
+          f"(last of {len(result.iterations)}, {result.refinements} re-expansions); "
           f"total {total:.3f} s")
     active = data.active
     print(f"active constraints: {', '.join(active) if active else 'none'}")
@@ -188,4 +228,4 @@ def cmd_assign(args: argparse.Namespace) -> int:
         print(f"wrote {c}")
     if html:
         print(f"wrote {html}")
-    return 0
+    return code

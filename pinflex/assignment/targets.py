@@ -1,0 +1,71 @@
+"""What an assignment asks for: target frequency histories, and the trajectory they hold on.
+
+:class:`Target` is one mode's wanted frequency history; :func:`target_matrix` checks targets
+and spreads them over the samples; :func:`check_trajectory_limits` checks a trajectory
+against the model before any work (one column per joint, inside the URDF limits).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pinflex.erls import FlexibleModel
+from pinflex.exceptions import ConfigurationError, InvalidTrajectory
+from pinflex.trajectory import Trajectory
+
+__all__ = ["Target", "check_trajectory_limits", "target_matrix"]
+
+
+@dataclass(frozen=True)
+class Target:
+    """A desired frequency history of one mode.
+
+    Attributes:
+        mode: Non-rigid mode number (1 = lowest).
+        freq_hz: Desired frequency [Hz]: a constant or one value per trajectory sample.
+        weight: Weight of the mode in the cost.
+    """
+
+    mode: int
+    freq_hz: float | np.ndarray
+    weight: float = 1.0
+
+
+
+def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
+    """Target frequencies (n_targets, ns) [Hz] of ``targets`` on ``ns`` samples (checked)."""
+    out = np.empty((len(targets), ns))
+    for i, t in enumerate(targets):
+        f = np.broadcast_to(np.asarray(t.freq_hz, dtype=float), (ns,))
+        if np.any(~np.isfinite(f)) or np.any(f <= 0):
+            raise ConfigurationError(f"target of mode {t.mode} must be positive frequencies [Hz]")
+        out[i] = f
+    return out
+
+
+def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> None:
+    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits.
+
+    The samples are converted to Pinocchio's joint values, which the limits refer to, and
+    checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off).
+
+    Args:
+        model: The flexible model whose URDF holds the limits [rad or m].
+        trajectory: Joint samples (ns, nv) in the model's user coordinates, one value per
+            moving joint.
+
+    Raises:
+        InvalidTrajectory: If the samples do not have one column per joint of the model.
+    """
+    q = np.asarray(trajectory.q)
+    if q.ndim != 2 or q.shape[1] != len(model.joint_names):
+        raise InvalidTrajectory(
+            f"the trajectory has samples of shape {q.shape}; the model needs (n_samples, "
+            f"{len(model.joint_names)}): one column per joint {list(model.joint_names)}")
+    joints = [model.description.joints[name] for name in model.joint_names]
+    in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
+    in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
+
