@@ -228,6 +228,7 @@ def size_for_floors(
     rho = None  # trust radius per variable (absolute units)
     tm = None
     solves = 0
+    stalls = 0
     bar = ProgressBar(4 * max_expansions, "sizing steps", bool(progress))
     while expansions < max_expansions and solves < 4 * max_expansions:
         if tm is None:
@@ -266,15 +267,17 @@ def size_for_floors(
             accept = margin > margin_old
         moved = float(np.max(np.abs(y_new[didx] - y[didx]) / span))
         assert rho is not None  # set at the first expansion, before any step
+        # out of reach: a step that gains less than 0.1 % of the shortfall is a stall
+        stalls = (stalls + 1 if accept and margin_old < -tol_hz
+                  and margin - margin_old < 1e-3 * -margin_old else 0)
         if accept:
             history.append((y_new.copy(), mass_new, margin))
             y, f_now, tm = y_new, f_new, None  # re-expand at the new design
             rho = np.minimum(rho * 2.0, span)
         else:
             rho = rho * 0.5
-        if (accept and moved < xtol) or np.all(rho < xtol * span):
-            if float(np.min(f_now - fmin[None, :])) >= -tol_hz:
-                break
+        if (accept and moved < xtol) or np.all(rho < xtol * span) or stalls >= 2:
+            break  # converged, or no step left that changes anything
     bar.total = bar.done
     bar.close()
     margin = float(np.min(f_now - fmin[None, :]))
