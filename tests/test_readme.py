@@ -1,4 +1,8 @@
-"""The README's "your own arm in five minutes": its files, commands and Python, as written."""
+"""The walk-throughs of the README and the docs: their files, commands and Python, as written.
+
+"Your own arm" (docs/howto/own-arm.md) and the short tour (docs/getting-started.md) are run
+line by line and the numbers their prose quotes are compared with the output.
+"""
 
 from __future__ import annotations
 
@@ -9,13 +13,23 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+OWN_ARM = ROOT / "docs" / "howto" / "own-arm.md"
+TOUR = ROOT / "docs" / "getting-started.md"
 
 
 def _section() -> str:
+    return OWN_ARM.read_text()
+
+
+def _readme_section(title: str) -> str | None:
     text = README.read_text()
-    start = text.index("## Your own arm in five minutes")
-    return text[start: text.index("\n## ", start + 5)]
+    if title not in text:
+        return None
+    start = text.index(title)
+    end = text.find("\n## ", start + 5)
+    return text[start: end if end > 0 else None]
 
 
 def _blocks(lang: str) -> list[str]:
@@ -77,3 +91,52 @@ def test_readme_python_runs(folder, monkeypatch, capsys):
     jid = arm.model.getJointId("shoulder_lift_joint")
     assert f"URDF's {arm.model.inertias[jid].mass:.2f} kg" in code
     assert "ModalResult(4 modes" in capsys.readouterr().out
+
+
+def test_readme_copy_of_the_walk_through_is_the_docs_one():
+    """Where the README repeats the walk-through, its files and commands are the tested ones."""
+    copy = _readme_section("## Your own arm in five minutes")
+    if copy is None:
+        return
+    for lang in ("xml", "toml", "bash", "python"):
+        assert re.findall(rf"```{lang}\n(.*?)```", copy, flags=re.S) == _blocks(lang), lang
+
+
+def _tour(path: Path) -> tuple[list[str], str]:
+    text = path.read_text()
+    start = text.index("<!-- tour")
+    block = re.search(r"```bash\n(.*?)```", text[start:], flags=re.S).group(1)
+    lines = [ln.split("  #")[0].strip() for ln in block.strip().splitlines()]
+    return lines, text[start:]
+
+
+def test_tour_commands_run_and_print_what_the_prose_says(tmp_path, monkeypatch, capsys):
+    """The short tour's commands exit 0 from the repository folder; its numbers are theirs."""
+    import warnings
+
+    from pinflex.cli import main
+
+    lines, prose = _tour(TOUR)
+    out_dir = tmp_path / "tour"
+    out_dir.mkdir()
+    monkeypatch.chdir(out_dir)
+    outputs = []
+    for line in lines:
+        argv = shlex.split(line)
+        assert argv[0] == "pinflex"
+        argv = [str(ROOT / a) if (ROOT / a).is_file() and "/" in a else a for a in argv]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            code = main(argv[1:])
+        out = capsys.readouterr()
+        assert code == 0, (line, out.err)
+        outputs.append(out.out)
+    f1 = float(re.search(r"^\s+1\s+([0-9.]+)", outputs[0], flags=re.M).group(1))
+    assert f"mode 1 at {f1:.2f} Hz" in prose
+    before, after = re.search(r"([0-9.]+ %) -> ([0-9.]+ %)", outputs[3]).groups()
+    assert f"{before} → {after}" in prose
+    peaks = re.findall(r"residual ([0-9.]+) mm", outputs[4])
+    assert f"{float(peaks[0]):.3f} → {float(peaks[1]):.3f} mm" in prose
+    for name in ("traj.csv", "modes_along.png", "assign/assignment.csv", "sim/tip_deflection.png",
+                 "modes.html"):
+        assert (out_dir / name).is_file(), name
