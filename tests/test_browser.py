@@ -171,3 +171,38 @@ def test_prbdm_preview_shows_the_chain_over_its_beam(browser, tmp_path):
         assert fg[: HEIGHT - CAPTION_ROWS].sum() > 5000
     changed = np.abs(shots[0] - shots[1]).sum(axis=2) > 60
     assert changed[: HEIGHT - CAPTION_ROWS].sum() > 1000
+
+
+SHIPPED = {  # shipped description, pose
+    "two_link.urdf": (True, [1.817, 5.312]),
+    "ur5_flexible.xml": (False, [0.0, -1.0, 1.2, 0.3, 0.5, 0.0]),
+    "panda_flexible.xml": (False, None),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SHIPPED))
+def test_mode_pages_of_the_shipped_arms_are_small_and_render(browser, name, tmp_path):
+    """Six modes of each shipped arm: a page of at most 5 MB that Chromium draws offline.
+
+    The render time (Chromium's start, decoding, first frames) is printed, not asserted: it
+    depends on the machine's load (`pytest -s -k shipped_arms` shows it).
+    """
+    import time
+
+    from pinflex import FlexibleModel
+    from pinflex.description.builtin import builtin_path
+    from pinflex.visualization import modes_preview
+
+    planar, q = SHIPPED[name]
+    model = FlexibleModel(builtin_path(name), planar=planar)
+    q = np.zeros(model.nv) if q is None else np.array(q)
+    page = modes_preview(model, q, 6).write_html(tmp_path / "modes.html")
+    size_mb = page.stat().st_size / 1e6
+    assert size_mb <= 5.0, f"{name}: {size_mb:.2f} MB"
+    start = time.perf_counter()
+    (shot,) = screenshots(browser, tmp_path, page, ["t=0.5&gui=0"])
+    seconds = time.perf_counter() - start
+    print(f"\n{name}: six modes, {size_mb:.2f} MB, rendered in {seconds:.1f} s")
+    fg = foreground(shot)[: HEIGHT - CAPTION_ROWS]
+    assert fg.sum() > 5000
+    assert orange(shot)[: HEIGHT - CAPTION_ROWS].sum() > 500  # the beams are drawn

@@ -13,7 +13,6 @@ Drawing into an existing viewer: pass ``viewer=`` a ``meshcat.Visualizer`` or a 
 
 from __future__ import annotations
 
-import base64
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,7 +23,7 @@ import numpy as np
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
 from pinflex.visualization import shapes
-from pinflex.visualization.offline import offline_visualizer
+from pinflex.visualization.offline import compact_animation, offline_visualizer, pack_chunks
 from pinflex.visualization.previews import view_direction
 from pinflex.visualization.robot import (
     RobotDrawing,
@@ -43,17 +42,13 @@ _SELECTOR = """
 <select id="pinflex-mode-select">{options}</select>
 </div>
 <script>
-(function () {{
-  var animations = {animations};
+pinflexReady.then(function () {{ return pinflexUnpack("{animations}"); }}).then(function (animations) {{
   var captions = {captions};
   var modes = {modes};
   var select = document.getElementById("pinflex-mode-select");
   var caption = document.getElementById("pinflex-caption");
   function show(i) {{
-    var raw = atob(animations[i]);
-    var bytes = new Uint8Array(raw.length);
-    for (var j = 0; j < raw.length; j++) {{ bytes[j] = raw.charCodeAt(j); }}
-    viewer.handle_command_bytearray(bytes);
+    viewer.handle_command_bytearray(animations[i]);
     var t = /[#&]t=([0-9.eE+-]+)/.exec(window.location.hash);
     if (t) {{ viewer.animator.pause(); viewer.animator.seek(parseFloat(t[1])); }}
     caption.textContent = captions[i];
@@ -64,7 +59,7 @@ _SELECTOR = """
   var m = /[#&]mode=([0-9]+)/.exec(window.location.hash);
   var first = modes.indexOf(m ? parseInt(m[1], 10) : {initial});
   show(first < 0 ? 0 : first);
-}})();
+}});
 </script>
 """
 
@@ -135,7 +130,8 @@ class ModesPreview:
         modes: Mode numbers (1 = lowest non-rigid).
         freq_hz: Their frequencies [Hz].
         captions: Caption of each mode.
-        animations: meshcat ``set_animation`` commands (msgpack bytes), one per mode.
+        animations: meshcat ``set_animation`` commands (msgpack bytes), one per mode; the
+            page carries them compacted (float32).
         info: ``scales`` (factor on each mass-normalised shape), ``amplitude_m``, ``grid``,
             ``clips`` (the ``meshcat.animation.Animation`` of each mode).
     """
@@ -179,7 +175,7 @@ class ModesPreview:
         )
         block = _SELECTOR.format(
             options=options,
-            animations=json.dumps([base64.b64encode(a).decode("ascii") for a in self.animations]),
+            animations=pack_chunks([compact_animation(a) for a in self.animations]),
             captions=json.dumps(list(self.captions)).replace("</", "<\\/"),
             modes=json.dumps(list(self.modes)),
             initial=int(self.modes[0] if initial is None else initial),

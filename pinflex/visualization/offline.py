@@ -21,6 +21,7 @@ which makes screenshots of given instants reproducible.
 from __future__ import annotations
 
 import base64
+import gzip
 import importlib
 import json
 from pathlib import Path
@@ -51,15 +52,28 @@ body {{ margin: 0; }}
 {viewer_js}
 </script>
 <script>
+// Scene data: one base64 string of a gzip stream of length-prefixed msgpack commands.
+function pinflexUnpack(b64) {{
+  var raw = atob(b64);
+  var bytes = new Uint8Array(raw.length);
+  for (var j = 0; j < raw.length; j++) {{ bytes[j] = raw.charCodeAt(j); }}
+  var stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("gzip"));
+  return new Response(stream).arrayBuffer().then(function (buf) {{
+    var out = [], view = new DataView(buf), pos = 0;
+    while (pos + 4 <= buf.byteLength) {{
+      var n = view.getUint32(pos, true);
+      pos += 4;
+      out.push(new Uint8Array(buf.slice(pos, pos + n)));
+      pos += n;
+    }}
+    return out;
+  }});
+}}
 var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
-(function () {{
-  var commands = [{commands}];
+var pinflexReady = pinflexUnpack("{commands}").then(function (commands) {{
   for (var i = 0; i < commands.length; i++) {{
-    var raw = atob(commands[i]);
-    var bytes = new Uint8Array(raw.length);
-    for (var j = 0; j < raw.length; j++) {{ bytes[j] = raw.charCodeAt(j); }}
     try {{
-      viewer.handle_command_bytearray(bytes);
+      viewer.handle_command_bytearray(commands[i]);
     }} catch (err) {{
       console.warn("pinflex: a scene command failed:", err);
     }}
@@ -68,6 +82,9 @@ var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
   if (match) {{
     viewer.animator.pause();
     viewer.animator.seek(parseFloat(match[1]));
+    // a paused scene stops drawing; keep drawing so that a screenshot finds a fresh frame
+    var redraw = function () {{ viewer.set_dirty(); requestAnimationFrame(redraw); }};
+    redraw();
   }}
   if (/[#&]gui=0/.test(window.location.hash)) {{
     viewer.gui.domElement.style.display = "none";
@@ -85,7 +102,7 @@ var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
     }};
     update();
   }}
-}})();
+}});
 </script>
 </body>
 </html>
@@ -172,7 +189,11 @@ class OfflineWindow:
             raise ValueError(f"meshcat command '{kind}' cannot be recorded offline")
 
     def commands(self) -> list[bytes]:
-        """The recorded scene as msgpack commands, objects first and the animation last."""
+        """The recorded scene as msgpack commands, objects first and the animation last.
+
+        The animation is as recorded (float64); the page carries it compacted
+        (:func:`compact_animation`).
+        """
         from meshcat.servers.tree import walk
 
         out = []
@@ -189,12 +210,18 @@ class OfflineWindow:
     def get_scene(self) -> str:
         """The scene as one HTML page with meshcat's viewer inlined (no network needed)."""
         js = viewer_js_path().read_text(encoding="utf-8")
-        encoded = ",\n".join(f'"{base64.b64encode(c).decode("ascii")}"' for c in self.commands())
         return HTML_TEMPLATE.format(
             title=_escape(self.title), caption=_escape(self.caption), viewer_js=js,
-            commands=encoded, timeline=json.dumps(self.timeline).replace("</", "<\\/"),
+            commands=pack_chunks(self._page_commands()),
+            timeline=json.dumps(self.timeline).replace("</", "<\\/"),
             legend=self._legend_html(),
         )
+
+    def _page_commands(self) -> list[bytes]:
+        out = self.commands()
+        if self.animation is not None:
+            out[-1] = compact_animation(self.animation)
+        return out
 
     def _legend_html(self) -> str:
         if not self.legend:
@@ -210,6 +237,45 @@ class OfflineWindow:
     def get_image(self):  # pragma: no cover - needs a browser
         """Not available offline: open the exported HTML in a browser instead."""
         raise NotImplementedError("an offline meshcat window has no browser to capture from")
+
+
+def pack_chunks(chunks) -> str:
+    """Byte strings as one base64 string of a gzip stream of length-prefixed records.
+
+    The page's ``pinflexUnpack`` reads it back (the browser's ``DecompressionStream``); scene
+    commands compress about threefold, which keeps previews of meshed arms small.
+    """
+    raw = b"".join(len(c).to_bytes(4, "little") + bytes(c) for c in chunks)
+    return base64.b64encode(gzip.compress(raw, compresslevel=9, mtime=0)).decode("ascii")
+
+
+def unpack_chunks(text: str) -> list[bytes]:
+    """The byte strings of :func:`pack_chunks`."""
+    raw = gzip.decompress(base64.b64decode(text))
+    out, pos = [], 0
+    while pos + 4 <= len(raw):
+        n = int.from_bytes(raw[pos:pos + 4], "little")
+        out.append(raw[pos + 4:pos + 4 + n])
+        pos += 4 + n
+    return out
+
+
+def compact_animation(command: bytes) -> bytes:
+    """A packed ``set_animation`` command made small for a page: numbers as float32.
+
+    A track whose keyframes all hold the same value keeps its first keyframe only (the object
+    stays where that value puts it). Display precision: float32 keeps 7 digits, 0.1 µm on a
+    1 m arm.
+    """
+    import umsgpack
+
+    data = umsgpack.unpackb(command)
+    for entry in data.get("animations", []):
+        for track in entry.get("clip", {}).get("tracks", []):
+            keys = track.get("keys", [])
+            if len(keys) > 1 and all(k["value"] == keys[0]["value"] for k in keys[1:]):
+                track["keys"] = keys[:1]
+    return umsgpack.packb(data, force_float_precision="single")
 
 
 def _escape(text: str) -> str:
