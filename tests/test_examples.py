@@ -7,7 +7,6 @@ asserts that the documentation quotes the value it computes. The slow examples a
 """
 
 import importlib.util
-import re
 from pathlib import Path
 
 import numpy as np

@@ -42,7 +42,9 @@ _SELECTOR = """
 <select id="pinflex-mode-select">{options}</select>
 </div>
 <script>
-pinflexReady.then(function () {{ return pinflexUnpack("{animations}"); }}).then(function (animations) {{
+pinflexReady.then(function () {{
+  return pinflexUnpack("{animations}");
+}}).then(function (animations) {{
   var captions = {captions};
   var modes = {modes};
   var select = document.getElementById("pinflex-mode-select");

@@ -31,7 +31,6 @@ from pinflex.visualization.scene import (
     JOINT_COLOUR,
     LINK_COLOUR,
     MASS_COLOUR,
-    ROOT,
     SceneWriter,
     rgb_int,
     segment_matrix,
@@ -85,10 +84,9 @@ def mesh_geometry(geometry_object) -> Any | None:
     for k in range(n_tris):
         t = mesh.tri_indices(k)
         faces[k] = (t[0], t[1], t[2])
-    if len(vertices) < 65536:
-        index, code, kind = faces.astype(np.uint16), 0x14, "Uint16Array"
-    else:
-        index, code, kind = faces, 0x16, "Uint32Array"
+    small = len(vertices) < 65536
+    index: np.ndarray = faces.astype(np.uint16) if small else faces
+    code, kind = (0x14, "Uint16Array") if small else (0x16, "Uint32Array")
 
     class _Buffer(mg.Geometry):
         def lower(self, object_data):
