@@ -1,0 +1,53 @@
+"""Short summaries of models and results: what they hold, never an array dump."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from pinflex.summaries import array_summary, dataclass_summary, model_summary, taylor_summary
+
+
+def test_small_arrays_are_shown_and_large_ones_summarised():
+    """Up to six values appear rounded; a larger array becomes shape, dtype and range."""
+    assert array_summary(np.array([1.817, 5.312])) == "[1.817, 5.312]"
+    big = np.linspace(-2.0, 3.0, 152 * 2).reshape(152, 2)
+    assert array_summary(big) == "<152×2 float64, -2 .. 3>"
+    assert "1 not finite" in array_summary(np.array([1.0, np.nan, 2.0, 3.0, 4.0, 5.0, 6.0]))
+
+
+def test_dataclass_summary_has_no_array_dump():
+    """A result with a 1000-sample array prints in a few lines, naming each field."""
+
+    @dataclasses.dataclass
+    class Result:
+        found: bool
+        freq_hz: np.ndarray
+        design: dict
+        hidden: np.ndarray = dataclasses.field(default=None, repr=False)
+
+    text = dataclass_summary(Result(True, np.arange(1000.0), {"m1": 0.237}))
+    assert text == "Result(found=True, freq_hz=<1000 float64, 0 .. 999>, design={m1: 0.237})"
+
+
+def test_flexible_model_summary_names_what_matters(two_link_planar):
+    """Robot, dof, flexible links, joint conditions and design, on a few lines."""
+    text = model_summary(two_link_planar)
+    for part in ("'two_link'", "23 (21 elastic + 2 joints, planar)", "link1 (4 elements, 0.6 m)",
+                 "link2 (3 elements, 0.45 m)", "all free (2)", "m1=0.125", "absolute"):
+        assert part in text, part
+    assert len(text.splitlines()) <= 10
+
+
+def test_taylor_summary_names_order_variables_modes_and_radius(two_link_planar):
+    """Order, the expanded variables, the modes and each mode's radius per variable."""
+    import pinflex
+
+    tm = pinflex.expand(two_link_planar, [1.817, 5.312], order=4, modes=(1, 2))
+    text = taylor_summary(tm)
+    assert "order=4" in text and "variables=4 (joints q[0], q[1]; design y[0], y[1])" in text
+    assert "modes=(1, 2)" in text and "q0=[1.817, 5.312]" in text
+    r = np.asarray(tm.radius)
+    assert f"mode 2: {array_summary(r[:, 1])}" in text
+    assert "array(" not in text and len(text) < 600
