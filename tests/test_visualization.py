@@ -314,3 +314,20 @@ def test_import_pinflex_does_not_need_meshcat():
                          check=True).stdout
     assert out.startswith("MissingDependency")
     assert "pip install meshcat" in out
+
+
+def test_previews_report_progress_when_asked(two_link_planar, capsys):
+    """The playback and the modes page draw a progress bar on stderr that ends at 100 %."""
+    from pinflex.assignment.study import user_trajectory
+    from pinflex.visualization.modes_page import modes_preview
+
+    traj = user_trajectory(two_link_planar, "benchmark_a")
+    trajectory_preview(two_link_planar, traj.times_s, traj.q, progress=True)
+    modes_preview(two_link_planar, Q0, 3, progress=True)
+    err = capsys.readouterr().err.splitlines()
+    playback = [line for line in err if line.startswith("playback")]
+    modes = [line for line in err if line.startswith("modes preview")]
+    assert re.match(r"playback \[#+\] (\d+)/\1 100%", playback[-1]), playback
+    assert re.match(r"modes preview \[#+\] 3/3 100%", modes[-1]), modes
+    trajectory_preview(two_link_planar, traj.times_s, traj.q)
+    assert capsys.readouterr().err == ""

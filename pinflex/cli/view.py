@@ -10,6 +10,7 @@ the scene served until Ctrl-C (or for ``--serve-seconds``). No browser is opened
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import numpy as np
@@ -32,6 +33,8 @@ def add_parser(sub) -> None:
                    help="play a joint trajectory (header: t, joint names) instead")
     p.add_argument("--amplitude", type=float, default=None, metavar="A",
                    help="peak displacement drawn [m] (default: 8 %% of the robot's size)")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar on stderr (shown by default when stderr is a terminal)")
     p.add_argument("--html", default=None, metavar="FILE",
                    help="write a static HTML preview instead of serving meshcat")
     p.add_argument("--serve-seconds", type=float, default=None, metavar="S",
@@ -62,6 +65,7 @@ def cmd_view(args: argparse.Namespace) -> int:
             f"mode {args.mode} does not exist: the model has elastic modes 1..{model.n_elastic}"
         )
     vis = None if args.html else served_visualizer()
+    progress = not args.no_progress and sys.stderr.isatty()
     if args.trajectory:
         from pinflex.native.along import trajectory_for
         from pinflex.trajectory import Trajectory
@@ -71,7 +75,8 @@ def cmd_view(args: argparse.Namespace) -> int:
         from pinflex.visualization.robot import pose_state, scene_points
 
         Q = trajectory_for(model, traj)
-        preview = trajectory_preview(model, traj.times_s, Q, mode=args.mode, viewer=vis)
+        preview = trajectory_preview(model, traj.times_s, Q, mode=args.mode, viewer=vis,
+                                     progress=progress)
         add_grid(preview.viewer, np.vstack([scene_points(pose_state(model, qk, 1))
                                             for qk in Q]))
         caption = (f"{model.description.name}: {traj.n_samples} samples over "
@@ -81,7 +86,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     else:
         n = max(int(args.modes), int(args.mode))
         page = modes_preview(model, q, min(n, model.n_elastic), amplitude_m=args.amplitude,
-                             viewer=vis)
+                             viewer=vis, progress=progress)
         if vis is not None:
             page.select(args.mode)
         caption = page.captions[page.modes.index(args.mode)]

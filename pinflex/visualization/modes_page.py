@@ -22,6 +22,7 @@ import numpy as np
 
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
+from pinflex.progress import ProgressBar
 from pinflex.visualization import shapes
 from pinflex.visualization.offline import compact_animation, offline_visualizer, pack_chunks
 from pinflex.visualization.previews import view_direction
@@ -216,6 +217,7 @@ def modes_preview(
     stations_per_element: int = 8,
     grid: bool = True,
     fill: float = 0.8,
+    progress: bool = False,
 ) -> ModesPreview:
     """Every requested mode at one pose, one animation each, on one page.
 
@@ -233,6 +235,7 @@ def modes_preview(
         grid: Draw a floor grid (round spacing, under the lowest point of the scene).
         fill: Fraction of the half-image the scene may use (the camera is as close as that
             allows, see :func:`pinflex.visualization.shapes.frame_points`).
+        progress: Show a progress bar on stderr (one step per mode).
 
     Returns:
         A :class:`ModesPreview` (``write_html`` for the offline page).
@@ -268,6 +271,7 @@ def modes_preview(
     phases = np.sin(2.0 * np.pi * np.arange(int(frames) + 1) / int(frames))
     animations, captions, clips = [], [], []
     qtext = ", ".join(f"{v:.4g}" for v in q)
+    bar = ProgressBar(len(mode_list), "modes preview", progress)
     for m in mode_list:
         writer.anim = ma.Animation(default_framerate=fps)
         for j, state in enumerate(drawing.mode_states(result, m, scales[m] * phases)):
@@ -282,6 +286,7 @@ def modes_preview(
             f"oscillation per {period_s:g} s"
             + (f"; grid {100 * grid_info['spacing_m']:g} cm" if grid_info else "")
         )
+        bar.update()
     # the first mode plays in the viewer itself (offline page, served or user viewer)
     vis.set_animation(clips[0], play=True, repetitions=REPETITIONS)
     describe_window(vis, title=f"pinflex: {model.description.name} modes", caption=captions[0])

@@ -19,6 +19,7 @@ import numpy as np
 
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
+from pinflex.progress import ProgressBar
 from pinflex.visualization import shapes
 from pinflex.visualization.offline import offline_visualizer
 from pinflex.visualization.robot import (
@@ -167,6 +168,7 @@ def trajectory_preview(
     slowdown: float = 4.0,
     fps: float = 60.0,
     title: str | None = None,
+    progress: bool = False,
 ) -> Preview:
     """Play a trajectory back with the beams coloured by one mode's frequency.
 
@@ -183,6 +185,7 @@ def trajectory_preview(
         slowdown: Animation time per real second.
         fps: Keyframe rate of the animation [1/s of animation time].
         title: Page title.
+        progress: Show a progress bar on stderr (poses, then keyframes).
 
     Returns:
         The preview; ``info`` holds ``freq_hz`` (n,), ``low_hz`` and ``high_hz``.
@@ -204,7 +207,11 @@ def trajectory_preview(
     frame_of = np.round((times - times[0]) * slowdown * fps).astype(int)
     keep = np.concatenate([[True], np.diff(frame_of) > 0])
     vis = offline_visualizer() if viewer is None else viewer
-    states = [pose_state(model, q, 1) for q in Q]
+    bar = ProgressBar(len(Q) + int(keep.sum()), "playback", progress)
+    states = []
+    for q in Q:
+        states.append(pose_state(model, q, 1))
+        bar.update()
     view = shapes.frame_points(np.vstack([scene_points(s) for s in states]),
                                view_direction(model))
     writer = SceneWriter(vis, view, fps)
@@ -213,6 +220,8 @@ def trajectory_preview(
     colours = shapes.colormap(freq, low, high)
     for i in np.flatnonzero(keep):
         drawing.key(int(frame_of[i]), states[i], colours[i])
+        bar.update()
+    bar.close()
     writer.finish()
     if labels is None:
         labels = [f"t = {t:.3f} s, mode {mode}: {f:.2f} Hz (joints {model.joint_switch})"
