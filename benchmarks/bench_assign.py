@@ -24,7 +24,7 @@ from pinflex.assignment import (
     solve_assignment_qp,
     solve_assignment_qp_scipy,
 )
-from pinflex.assignment.benchmark_a import Q0, assign_mode1, benchmark_model, benchmark_trajectory
+from pinflex.cases.benchmark_a import Q0, assign_mode1, benchmark_model, benchmark_trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -36,9 +36,9 @@ import numpy as np  # noqa: E402
 import scipy.linalg  # noqa: E402
 from scipy.linalg import lapack  # noqa: E402
 
+from pinflex.cases.benchmark_a_path import benchmark_a_trajectory  # noqa: E402
 from pinflex.description import load, parse  # noqa: E402
 from pinflex.erls import FlexibleModel  # noqa: E402
-from pinflex.trajectory import benchmark_a_trajectory  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg
 from timing import best_of
 
-from pinflex.assignment.benchmark_a import (
+from pinflex.cases.benchmark_a import (
     PAPER,
     Q0,
     benchmark_model,

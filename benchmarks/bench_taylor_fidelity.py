@@ -37,7 +37,7 @@ pin_single_thread()
 
 import numpy as np  # noqa: E402
 
-from pinflex.assignment.benchmark_a import Q0, benchmark_model, benchmark_trajectory  # noqa: E402
+from pinflex.cases.benchmark_a import Q0, benchmark_model, benchmark_trajectory  # noqa: E402
 from pinflex.erls import FlexibleModel  # noqa: E402
 from pinflex.parametric import expand  # noqa: E402
 from pinflex.parametric.fidelity import next_order_estimates, two_term_estimates  # noqa: E402

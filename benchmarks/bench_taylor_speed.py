@@ -36,7 +36,7 @@ pin_single_thread()
 import numpy as np  # noqa: E402
 import scipy.linalg as sla  # noqa: E402
 
-from pinflex.assignment.benchmark_a import (  # noqa: E402
+from pinflex.cases.benchmark_a import (  # noqa: E402
     Q0,
     assign_mode1,
     benchmark_model,

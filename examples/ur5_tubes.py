@@ -22,7 +22,7 @@ from scipy.optimize import minimize
 from pinflex.assignment.sizing import size_for_floors
 from pinflex.erls import FlexibleModel
 from pinflex.erls.design import design_mass
-from pinflex.native.workspace import path_from_spec
+from pinflex.trajectory.cartesian import path_from_spec
 
 URDF = Path(__file__).resolve().parents[1] / "urdf" / "ur5_tubes.xml"
 FLOOR_HZ = 70.0

@@ -31,7 +31,7 @@ _EXPORTS = {
     "assign_frequencies": "pinflex.assignment",
     "brute_force": "pinflex.assignment",
     "build_assignment": "pinflex.assignment",
-    "example_robot": "pinflex.native.robots",
+    "example_robot": "pinflex.erls.robots",
     "expand": "pinflex.parametric",
     "load": "pinflex.description",
     "matrix_jets": "pinflex.parametric",
@@ -73,8 +73,8 @@ if TYPE_CHECKING:
     )
     from pinflex.description import RobotDescription, load
     from pinflex.erls import FlexibleData, FlexibleModel, ModalResult
+    from pinflex.erls.robots import example_robot
     from pinflex.exceptions import PinflexError, PinflexWarning
-    from pinflex.native.robots import example_robot
     from pinflex.native.spec import Beam, Mass, Material
     from pinflex.parametric import TaylorModel, expand, matrix_jets
     from pinflex.trajectory import Trajectory

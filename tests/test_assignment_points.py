@@ -9,9 +9,9 @@ import pytest
 from conftest import TWO_LINK
 
 from pinflex import Target
-from pinflex.assignment.benchmark_a import benchmark_trajectory
 from pinflex.assignment.driver import assign_frequencies, build_assignment
 from pinflex.assignment.points import points_for_tolerance
+from pinflex.cases.benchmark_a import benchmark_trajectory
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError, TaylorRadiusWarning

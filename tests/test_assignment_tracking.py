@@ -13,6 +13,7 @@ from conftest import TWO_LINK
 from reference_fe import planar_two_link_frequencies
 
 from pinflex import Target, assign_frequencies
+from pinflex.cases.benchmark_a_path import benchmark_a_trajectory
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import (
@@ -21,7 +22,7 @@ from pinflex.exceptions import (
     AssignmentWarning,
     ModeCrossingWarning,
 )
-from pinflex.trajectory import Trajectory, benchmark_a_trajectory
+from pinflex.trajectory import Trajectory
 
 Q0_A = np.array([1.817, 5.312])
 

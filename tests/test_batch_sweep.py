@@ -84,7 +84,7 @@ def test_benchmark_a_case_reproduces_the_paper():
     (row,) = run_assign_case(cfg, overrides, chash, 0)
     assert row["status"] == "ok", row["error"]
     # the row's errors are the exact model's, recomputed here directly from its design
-    from pinflex.assignment.benchmark_a import benchmark_model, benchmark_trajectory
+    from pinflex.cases.benchmark_a import benchmark_model, benchmark_trajectory
 
     model = benchmark_model()
     q = benchmark_trajectory(model).q

@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from pinflex.assignment.benchmark_a import (
+from pinflex.cases.benchmark_a import (
     TARGET_HZ,
     benchmark_model,
     benchmark_trajectory,

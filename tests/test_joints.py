@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 import pytest
+from arms import spatial_reference, spatial_urdf
 from conftest import TWO_LINK
 from reference_fe import cantilever_hz, planar_two_link_frequencies, torsion_fixed_free_hz
-from test_global_fe import _reference, _spatial_urdf
 
 import pinflex
 from pinflex.description import parse
@@ -101,15 +101,15 @@ def test_spatial_springs_and_locks_match_global_frame(seed):
     """A skewed spatial arm: springs on both revolute joints, then a locked elbow."""
     rng = np.random.default_rng(seed)
     m1, m2 = rng.uniform(0, 0.5, size=2)
-    desc = parse(_spatial_urdf(m1, m2))
+    desc = parse(spatial_urdf(m1, m2))
     k1, k2 = rng.uniform(50.0, 500.0, size=2)
     sprung = FlexibleModel(desc, joints={"j1": k1, "j2": k2})
     elbow_locked = FlexibleModel(desc, joints={"j2": "locked"})
     for q in rng.uniform(-np.pi, np.pi, size=(2, 2)):
-        _, ref = _reference(q, m1, m2, springs={0: k1, 1: k2})
+        _, ref = spatial_reference(q, m1, m2, springs={0: k1, 1: k2})
         # the soft spring modes (~2 Hz beside ~1e4 Hz) lose a digit to conditioning
         np.testing.assert_allclose(sprung.frequencies(q), ref, rtol=1e-8)
-        _, ref = _reference(q, m1, m2, elbow="fixed")
+        _, ref = spatial_reference(q, m1, m2, elbow="fixed")
         np.testing.assert_allclose(elbow_locked.frequencies(q), ref, rtol=1e-9)
 
 
@@ -280,7 +280,7 @@ def test_linear_model_export_of_a_locked_elbow():
 
 def test_modes_along_a_motion_on_a_locked_arm_are_the_locked_frequencies():
     """Mode tracking works on the modal coordinates of a locked arm."""
-    from pinflex.tracking import track_modes
+    from pinflex.erls.tracking import track_modes
 
     model = _bench("locked")
     Q = Q0 + np.linspace(0.0, 0.3, 5)[:, None] * np.array([0.0, 1.0])

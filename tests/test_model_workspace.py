@@ -16,13 +16,13 @@ from reference_fe import planar_two_link_frequencies
 import pinflex
 from pinflex.description import parse
 from pinflex.erls import FlexibleData, FlexibleModel
+from pinflex.erls.tracking import track_modes
 from pinflex.exceptions import (
     ConfigurationError,
     DesignVariableNotFound,
     DesignVariableOutOfBounds,
     ImmutableModelError,
 )
-from pinflex.tracking import track_modes
 
 Q0 = np.array([1.817, 5.312])
 POSES = np.array([[1.817, 5.312], [0.3, 2.0], [2.5, 4.0], [-0.7, 1.1]])

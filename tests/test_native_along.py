@@ -13,10 +13,10 @@ import pinflex
 from pinflex import Beam, Mass, Material
 from pinflex.beam import hollow_circle
 from pinflex.cli import main
+from pinflex.erls.along import modes_along
 from pinflex.exceptions import IKNotConverged, InvalidPath, InvalidTrajectory, JointLimitsExceeded
-from pinflex.native.along import modes_along
-from pinflex.native.workspace import frame_position, path_trajectory, sample_polyline
 from pinflex.trajectory import Trajectory
+from pinflex.trajectory.cartesian import frame_position, path_trajectory, sample_polyline
 
 ALU = Material(E=70e9, G=26.3e9, density=2700.0)
 Q0 = np.array([0.0, -1.2, 1.5, -1.9, -1.57, 0.0])
@@ -171,7 +171,7 @@ def test_study_path_table(tmp_path, arm):
 
 def test_tracking_reference_point_of_a_six_joint_arm(arm):
     """A reference (q0, y0) with 6 joints and 1 design value is a point, not a sample index."""
-    from pinflex.tracking import track_modes
+    from pinflex.erls.tracking import track_modes
 
     Q = np.linspace(Q0, Q0 + [0.2, 0.1, -0.1, 0, 0, 0], 5)
     tr = track_modes(arm, Q, modes=(1, 2), reference=(Q0 + 0.01, np.array([2.0])))

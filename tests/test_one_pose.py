@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
+from arms import PRISMATIC
 from conftest import TWO_LINK, UR5, single_link_urdf
-from test_parametric import PRISMATIC
 
 from pinflex.description import parse
-from pinflex.erls import FlexibleModel, modal, solve
+from pinflex.erls import FlexibleModel, eigensolve, modal, one_pose, solve
 from pinflex.exceptions import ConfigurationError, DesignVariableOutOfBounds
 
 # a beam carrying a rigid link with an inertia and a (non-design) point mass, behind a
@@ -59,12 +59,12 @@ def test_one_pose_mass_equals_the_block_assembly(models):
         terms = model.pose_terms(model.check_q(q)[None])
         plan = solve.solve_plan(model)
         twist = solve.root_twists(model, plan, terms, 1)
-        layout = solve.one_pose_layout(model)
+        layout = one_pose.one_pose_layout(model)
         assert layout is not None, name
         ys = [model.y0] + ([np.linspace(0.03, 0.2, model.ny)] if model.ny else [])
         for y in ys:
             ref = solve.mass(model, terms, y, 1)[0]
-            got, S = solve.mass_one(model, layout, terms, twist, y)
+            got, S = one_pose.mass_one(model, layout, terms, twist, y)
             rows = layout.S0.shape[0] if layout.keep is None else layout.keep.size
             assert S.shape == (rows, model.nx + model.nv)
             assert np.abs(got - ref).max() <= 1e-14 * np.abs(ref).max(), name
@@ -77,8 +77,8 @@ def _general_modes(model, q, n_modes):
     plan = solve.solve_plan(model)
     twist = solve.root_twists(model, plan, terms, 1)
     M = solve.mass(model, terms, model.y0, 1)[0]
-    lam, sw, sx = solve.eigvecs(model, M, n_modes)
-    shapes = np.concatenate([solve.to_nodal(model, twist, sw), sx], axis=1)
+    lam, sw, sx = eigensolve.eigvecs(model, M, n_modes)
+    shapes = np.concatenate([eigensolve.to_nodal(model, twist, sw), sx], axis=1)
     phix = shapes[: model.nx]
     idx = np.argmax(np.abs(phix), axis=0)
     shapes *= np.where(phix[idx, np.arange(lam.size)] < 0, -1.0, 1.0)[None, :]
@@ -112,8 +112,8 @@ def test_large_layouts_fall_back_to_the_block_assembly(models, monkeypatch):
     before = model.modes(q, n_modes=3)
     f_before = model.frequencies(q, n_modes=3)
     fresh = FlexibleModel(parse(PRISMATIC))
-    monkeypatch.setattr(solve, "ONE_POSE_MAX_ROWS", 10)
-    assert solve.one_pose_layout(fresh) is None
+    monkeypatch.setattr(one_pose, "ONE_POSE_MAX_ROWS", 10)
+    assert one_pose.one_pose_layout(fresh) is None
     after = fresh.modes(q, n_modes=3)
     np.testing.assert_allclose(after.eigvals, before.eigvals, rtol=1e-12)
     np.testing.assert_allclose(after.shapes, before.shapes,
@@ -202,7 +202,7 @@ def test_one_pose_root_twists_equal_the_batched_ones(models):
         terms = model.pose_terms_one(model.check_q(q))
         plan = solve.solve_plan(model)
         ref = solve.root_twists(model, plan, terms, 1)
-        got = solve.root_twists_one(model, plan, terms)
+        got = one_pose.root_twists_one(model, plan, terms)
         read = set(plan.cores) | set(model.plan.inertias) | {
             pm.link for pm in model.plan.point_masses}
         assert read <= set(got) <= set(ref), name
@@ -225,7 +225,7 @@ def test_planar_rows_left_out_are_zero_at_every_pose():
     and design values (and that spatial models leave nothing out).
     """
     planar = FlexibleModel(TWO_LINK, planar=True)
-    layout = solve.one_pose_layout(planar)
+    layout = one_pose.one_pose_layout(planar)
     dropped = np.setdiff1d(np.arange(layout.S0.shape[0]), layout.keep)
     assert dropped.size == 12  # 3 components x (root, frame) x 2 links
     rng = np.random.default_rng(4)
@@ -234,7 +234,7 @@ def test_planar_rows_left_out_are_zero_at_every_pose():
     for _ in range(20):
         q = rng.uniform(-3, 3, size=2)
         terms = planar.pose_terms_one(q)
-        twist = solve.root_twists_one(planar, plan, terms)
+        twist = one_pose.root_twists_one(planar, plan, terms)
         S = layout.S0.copy()  # the fill of mass_one, before the rows are gathered
         for link, re, rj in layout.beams:
             if twist[link] is not None:
@@ -244,4 +244,4 @@ def test_planar_rows_left_out_are_zero_at_every_pose():
         assert np.abs(S[dropped]).max() <= 1e-14 * scale
         assert np.abs(S[layout.keep]).max() > 0.1 * scale
     for spatial in (FlexibleModel(TWO_LINK), FlexibleModel(UR5)):
-        assert solve.one_pose_layout(spatial).keep is None
+        assert one_pose.one_pose_layout(spatial).keep is None

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from arms import two_link
 from reference_fe import planar_two_link_frequencies
 
 import pinflex
@@ -21,28 +22,6 @@ from pinflex.exceptions import (
 from pinflex.parametric import matrix_jets
 
 Q0 = np.array([1.817, 5.312])
-
-
-def two_link(section1, section2, *, params="", material='E="69e9" density="2687"',
-             extra="", joints=""):
-    """Benchmark A's geometry with the given sections, parameters and extras."""
-    return f"""<robot name="tubes" xmlns:pinflex="urn:pinflex:urdf:1">
-  <link name="base"/><link name="link1"/><link name="link2"/><link name="tool"/>
-  <joint name="q1" type="revolute"><parent link="base"/><child link="link1"/>
-    <axis xyz="0 0 1"/><limit lower="-7" upper="7" effort="1" velocity="1"/></joint>
-  <joint name="q2" type="revolute"><parent link="link1"/><child link="link2"/>
-    <origin xyz="0.6 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-7" upper="7" effort="1" velocity="1"/></joint>
-  <joint name="tool_joint" type="fixed"><parent link="link2"/><child link="tool"/>
-    <origin xyz="0.45 0 0"/></joint>
-  <pinflex:coordinates convention="absolute"/>
-  {params}
-  <pinflex:flexible link="link1" elements="4" normal="0 0 1">
-    <pinflex:material {material}/><pinflex:section {section1}/></pinflex:flexible>
-  <pinflex:flexible link="link2" elements="3" normal="0 0 1">
-    <pinflex:material {material}/><pinflex:section {section2}/></pinflex:flexible>
-  {extra}{joints}
-</robot>"""
 
 
 TUBES = two_link(

@@ -5,6 +5,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from arms import PRISMATIC
 from conftest import TWO_LINK, single_link_urdf
 
 from pinflex import jets
@@ -15,29 +16,7 @@ from pinflex.parametric import expand, matrix_jets, pose_jets
 
 Q0 = np.array([1.817, 5.312])
 
-PRISMATIC = """<robot name="slider" xmlns:pinflex="urn:pinflex:urdf:1">
-  <link name="base"/><link name="carriage"><inertial><origin xyz="0 0 0.05"/><mass value="2"/>
-    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.015"/></inertial></link>
-  <link name="arm"/><link name="fore"/>
-  <joint name="s" type="prismatic"><parent link="base"/><child link="carriage"/>
-    <origin xyz="0.1 0 0" rpy="0.2 0 0"/><axis xyz="1 0 0"/>
-    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
-  <joint name="r" type="revolute"><parent link="carriage"/><child link="arm"/>
-    <origin xyz="0 0.05 0.1" rpy="0 0.3 0"/><axis xyz="0 0 1"/>
-    <limit lower="-4" upper="4" effort="1" velocity="1"/></joint>
-  <joint name="e" type="revolute"><parent link="arm"/><child link="fore"/>
-    <origin xyz="0.5 0 0" rpy="0.4 0 0"/><axis xyz="0 1 0"/>
-    <limit lower="-4" upper="4" effort="1" velocity="1"/></joint>
-  <pinflex:flexible link="arm" elements="3" tip="0.5 0 0" normal="0 0 1">
-    <pinflex:material E="7e10" density="2700"/>
-    <pinflex:section shape="rectangle" width="0.02" height="0.03"/></pinflex:flexible>
-  <pinflex:flexible link="fore" elements="2" tip="0.4 0 0" normal="0 1 0">
-    <pinflex:material E="7e10" density="2700"/>
-    <pinflex:section shape="hollow_circle" outer_diameter="0.03" inner_diameter="0.02"/>
-  </pinflex:flexible>
-  <pinflex:point_mass name="tool" link="fore" xyz="0.4 0 0.02" mass="0.3"
-     design="true" lower="0" upper="1"/>
-</robot>"""
+
 
 
 def _unit(space, k):

@@ -11,10 +11,10 @@ import pytest
 from conftest import TWO_LINK
 from reference_fe import planar_two_link_frequencies
 
+from pinflex.cases.benchmark_a_path import benchmark_a_trajectory
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import TaylorRadiusExceeded, TaylorRadiusWarning
 from pinflex.parametric import expand
-from pinflex.trajectory import benchmark_a_trajectory
 
 Q0 = np.array([1.817, 5.312])
 Y0 = np.array([0.125, 0.125])

@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
+from arms import two_link
 from scipy.optimize import minimize
-from test_parameters import two_link
 
 from pinflex.assignment import Target, assign_frequencies
 from pinflex.assignment.sizing import size_for_floors

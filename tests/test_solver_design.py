@@ -7,8 +7,8 @@ formulation of the same pencil), and the exact model's frequencies (nodal pencil
 import numpy as np
 import pytest
 import scipy.linalg as sla
+from arms import two_link
 from conftest import ROOT
-from test_parameters import two_link
 
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel

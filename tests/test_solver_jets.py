@@ -8,7 +8,7 @@ from pinflex import jets
 from pinflex.erls import FlexibleModel
 from pinflex.jets import JetSpace
 from pinflex.parametric import expand, matrix_jets
-from pinflex.parametric.conditioned import SparseJetAlgebra
+from pinflex.parametric.algebra import SparseJetAlgebra
 from pinflex.parametric.eigen import eigen_jets
 
 
@@ -45,7 +45,7 @@ def test_static_joints_are_those_the_spectrum_ignores():
     The UR5's frequencies do not change with the pan angle (the shoulder lift's do);
     benchmark A in absolute angles has none (its first coordinate also sets link 2's angle).
     """
-    from pinflex.assignment.benchmark_a import benchmark_model
+    from pinflex.cases.benchmark_a import benchmark_model
     from pinflex.parametric.conditioned import static_joints
 
     model = FlexibleModel(UR5)

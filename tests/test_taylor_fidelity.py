@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from conftest import UR5
 
-from pinflex.assignment.benchmark_a import benchmark_model, benchmark_trajectory
+from pinflex.cases.benchmark_a import benchmark_model, benchmark_trajectory
 from pinflex.description import load
 from pinflex.erls import FlexibleModel
 from pinflex.erls.fidelity import refined

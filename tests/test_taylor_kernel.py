@@ -1,6 +1,6 @@
 """The compiled two-joint evaluation against the NumPy path it replaces, and where it is used.
 
-References: the NumPy ``_PowerGrid`` evaluation (run directly), ``jets.evaluate`` (the
+References: the NumPy ``PowerGrid`` evaluation (run directly), ``jets.evaluate`` (the
 coefficient sum Σ c_α δx^α) and the per-sample radius estimate's decisions.
 """
 
@@ -15,8 +15,8 @@ from conftest import TWO_LINK
 from pinflex import jets
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError, TaylorRadiusExceeded, TaylorRadiusWarning
+from pinflex.parametric import evaluation as taylor
 from pinflex.parametric import expand
-from pinflex.parametric import model as taylor
 
 numba = pytest.importorskip("numba")
 
@@ -108,7 +108,7 @@ def test_other_models_keep_the_numpy_path(arm, case):
     """Only two-joint models without design get the kernel; the others keep the NumPy path.
 
     They evaluate by the monomial rows and equal the coefficient sum (three-joint arms: see
-    ``test_review_wave4.py``).
+    ``test_solver_route_further_arms.py``).
     """
     if case == "one joint":
         tm = expand(arm, Q0, order=4, modes=(1,), joints=["q2"], design=[])
@@ -136,7 +136,7 @@ def test_numba_is_loaded_only_by_many_two_joint_evaluations():
     it, with the values of the NumPy path.
     """
     code = (f"import sys, threading, numpy as np\nfrom pinflex.erls import FlexibleModel\n"
-            f"from pinflex.parametric import expand, model\n"
+            f"from pinflex.parametric import expand, evaluation as model\n"
             f"a = FlexibleModel({str(TWO_LINK)!r}, planar=True)\n"
             f"tm = expand(a, np.array({Q0.tolist()}), order=2, design=[])\n"
             f"Q = np.array([{Q0.tolist()}])\n"

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import TWO_LINK
 
-from pinflex.assignment.benchmark_a import benchmark_trajectory
+from pinflex.cases.benchmark_a import benchmark_trajectory
 from pinflex.erls import FlexibleModel
 from pinflex.parametric import expand, expand_along
 

@@ -6,8 +6,8 @@ import pytest
 
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel
+from pinflex.erls.tracking import mac_matrix, track, track_modes
 from pinflex.exceptions import ConfigurationError
-from pinflex.tracking import mac_matrix, track, track_modes
 
 
 def _family(t, c):

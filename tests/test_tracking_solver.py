@@ -6,9 +6,9 @@ import pytest
 from conftest import TWO_LINK
 
 from pinflex.description import parse
-from pinflex.erls import FlexibleModel, solve
+from pinflex.erls import FlexibleModel, eigensolve, solve
+from pinflex.erls.tracking import PoseMap, mac_matrix, track, track_modes
 from pinflex.exceptions import ConfigurationError
-from pinflex.tracking import PoseMap, mac_matrix, track, track_modes
 
 Q0_A = np.array([1.817, 5.312])
 
@@ -31,7 +31,7 @@ def _elbow_sweep(n):
 
 
 def test_a_moved_shape_is_the_same_nodal_shape(crossing_arm):
-    """T(q_t) move(φ, s, t) = T(q_s) φ, with T the solver-to-nodal map of solve.to_nodal."""
+    """T(q_t) move(φ, s, t) = T(q_s) φ, with T the solver-to-nodal map of eigensolve.to_nodal."""
     model = crossing_arm
     Q = np.array([[0.3, 0.0], [-0.4, 0.5], [1.1, -0.7]])
     terms = model.pose_terms(Q)
@@ -45,7 +45,7 @@ def test_a_moved_shape_is_the_same_nodal_shape(crossing_arm):
         tw = {k: None if v is None else v[i : i + 1] for k, v in twist.items()}
         full = np.zeros((model.ndof, x.shape[1]))
         full[: model.nx] = x
-        return solve.to_nodal(model, tw, full)[: model.nx]
+        return eigensolve.to_nodal(model, tw, full)[: model.nx]
 
     moved = pm.move(phi, np.array([0, 1, 2]), np.array([2, 0, 1]))
     for s, t in ((0, 2), (1, 0), (2, 1)):
@@ -96,8 +96,8 @@ def test_a_crossing_in_solver_coordinates_is_caught_not_matched_by_order(crossin
 
 def test_benchmark_a_step_macs_need_the_pose_map(two_link):
     """Unmoved solver shapes give another MAC between poses; moved ones give the nodal one."""
-    from pinflex.assignment.benchmark_a import benchmark_trajectory
-    from pinflex.tracking import solver_eigenpairs
+    from pinflex.cases.benchmark_a import benchmark_trajectory
+    from pinflex.erls.tracking import solver_eigenpairs
 
     Q = benchmark_trajectory(two_link).q[::8]
     y = two_link.check_y(np.array([0.2, 0.05]))
@@ -114,7 +114,7 @@ def test_benchmark_a_step_macs_need_the_pose_map(two_link):
 
 def test_design_only_lead_in_and_named_errors(two_link):
     """A reference on a sample with another design walks the design at one pose."""
-    from pinflex.assignment.benchmark_a import benchmark_trajectory
+    from pinflex.cases.benchmark_a import benchmark_trajectory
 
     Q = benchmark_trajectory(two_link).q
     kw = {"modes": (1, 2), "reference": (Q0_A, two_link.y0)}

@@ -9,6 +9,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from pinflex.cases.benchmark_a_path import (
+    BENCHMARK_A_Q0_ABS,
+    BENCHMARK_A_Q0_SAMPLE,
+    benchmark_a_path,
+    benchmark_a_trajectory,
+)
 from pinflex.exceptions import (
     IKNotConverged,
     InvalidPath,
@@ -17,12 +23,8 @@ from pinflex.exceptions import (
     TrajectoryWarning,
 )
 from pinflex.trajectory import (
-    BENCHMARK_A_Q0_ABS,
-    BENCHMARK_A_Q0_SAMPLE,
     Trajectory,
     absolute_to_relative,
-    benchmark_a_path,
-    benchmark_a_trajectory,
     planar_2r_fk,
     planar_2r_ik,
     relative_to_absolute,

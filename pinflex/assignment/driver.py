@@ -29,7 +29,7 @@ word whether the exact model meets everything (:mod:`pinflex.assignment.result`)
 line exits with 3 when it does not.
 
 Mode identity: a target "mode i" is mode i at the expansion point, followed by shape along the
-design change and the trajectory (:mod:`pinflex.assignment.verify`, :mod:`pinflex.tracking`);
+design change and the trajectory (:mod:`pinflex.assignment.verify`, :mod:`pinflex.erls.tracking`);
 ``max_error_*`` are the errors of those tracked modes, ``max_error_*_sorted`` those of the
 sorted mode numbers. When a target mode crosses or veers with another one along the trajectory
 the two differ and :class:`~pinflex.exceptions.ModeCrossingWarning` is issued. A design whose

@@ -16,7 +16,7 @@ variables ``δy = y − y0`` are common to all rows.
 What the points do not judge: the design direction. The QP uses the polynomial linear in the
 design (eq. 9), whose error away from ``y0`` comes from that linearisation and not from the
 order (benchmark A at q0 over y ∈ [0, 0.25]²: 1.30 % at p = 2, 4 and 6 alike, the full
-polynomial 0.41 / 0.046 / 0.005 %, :func:`pinflex.assignment.benchmark_a.taylor_errors`); one
+polynomial 0.41 / 0.046 / 0.005 %, :func:`pinflex.cases.benchmark_a.taylor_errors`); one
 point with the order
 chosen over the design-box corners (``taylor_tol``) is the other knob, and the two are not
 combined.
@@ -151,9 +151,9 @@ def points_for_tolerance(model, Q: np.ndarray, y0: np.ndarray, *, tol: float,
     """
     import warnings
 
+    from pinflex.erls.tracking import track_modes
     from pinflex.parametric import expand_along
     from pinflex.parametric.fidelity import TWO_TERM_RULE
-    from pinflex.tracking import track_modes
 
     if not tol > 0:
         raise ConfigurationError(f"points tolerance {tol}: give a positive relative tolerance")

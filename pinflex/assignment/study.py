@@ -11,7 +11,7 @@ Example (paths are relative to the file; ``builtin:`` names a file shipped with 
     [trajectory]
     builtin = "benchmark_a"        # or: csv = "traj.csv" (columns t, then joints, in the
                                    # model's user coordinates), or a 3-D workspace path:
-    # [trajectory.path]            # (see pinflex.native.workspace.path_from_spec)
+    # [trajectory.path]            # (see pinflex.trajectory.cartesian.path_from_spec)
     # frame = "ee_link"
     # waypoints = [[0, 0.3, -0.1], [-0.2, 0.3, 0]]   # [m]
     # relative = true              # offsets from the frame at start_q
@@ -70,10 +70,11 @@ import numpy as np
 from pinflex.assignment.driver import assign_frequencies
 from pinflex.assignment.targets import Target
 from pinflex.assignment.study_schema import check_against_model, check_study
+from pinflex.cases.benchmark_a_path import benchmark_a_trajectory
 from pinflex.description.builtin import builtin_path
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError, StudyError
-from pinflex.trajectory import Trajectory, benchmark_a_trajectory
+from pinflex.trajectory import Trajectory
 
 
 def resolve(value: str, folder: Path) -> Path:
@@ -138,7 +139,7 @@ class AssignmentConfig:
         if "csv" in self.trajectory:
             return Trajectory.from_csv(resolve(self.trajectory["csv"], self.folder))
         if "path" in self.trajectory:
-            from pinflex.native.workspace import path_from_spec
+            from pinflex.trajectory.cartesian import path_from_spec
 
             return path_from_spec(model, self.trajectory["path"], name="path")
         raise ConfigurationError(

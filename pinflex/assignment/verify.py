@@ -3,7 +3,7 @@
 Mode identity. A target "mode i" is the mode numbered i (sorted, non-rigid) **at the
 expansion point** ``(q0, y0)`` of the Taylor model: that is the branch the Taylor series and
 the QP follow. The exact model is checked on the same branch: each verified design is
-tracked by shape (:func:`pinflex.tracking.track_modes`) from the expansion point, along the
+tracked by shape (:func:`pinflex.erls.tracking.track_modes`) from the expansion point, along the
 design change at ``q0`` and then along the trajectory (in the conditioned solve's coordinates
 where it covers the model, with shapes mapped between poses so that the MACs are the nodal
 ones; else on the nodal pencil). Where a target mode crosses or veers
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.tracking import ModeTracking, track_modes
+from pinflex.erls.tracking import ModeTracking, track_modes
 
 __all__ = ["Verification", "exact_floor_candidates", "floor_margins", "verify_tracked"]
 

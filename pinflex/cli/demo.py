@@ -3,7 +3,7 @@
 The demo is a list of sections (:data:`SECTIONS`), each a function of one shared
 :class:`Demo` that prints its lines and adds its results to ``demo.report`` (the ``--json``
 object). A new section is a function and one entry in the list. The numbers come from
-:mod:`pinflex.assignment.benchmark_a`, which the benchmarks call too.
+:mod:`pinflex.cases.benchmark_a`, which the benchmarks call too.
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ class Demo:
 
 def modes_section(demo: Demo) -> None:
     """Model size and the lowest modes at (q0, y0)."""
-    from pinflex.assignment.benchmark_a import Q0
+    from pinflex.cases.benchmark_a import Q0
 
     model = demo.model
     demo.say("pinflex demo: benchmark A (paper 000), planar two-link flexible arm")
@@ -84,7 +84,7 @@ def modes_section(demo: Demo) -> None:
 
 def taylor_section(demo: Demo) -> None:
     """Accuracy of the p = 4 Taylor model of mode 1 beside the paper's (Sec. 3.2)."""
-    from pinflex.assignment.benchmark_a import PAPER, expand_mode1, taylor_errors
+    from pinflex.cases.benchmark_a import PAPER, expand_mode1, taylor_errors
 
     t0 = time.perf_counter()
     tm = expand_mode1(demo.model)
@@ -102,7 +102,7 @@ def taylor_section(demo: Demo) -> None:
 
 def assignment_section(demo: Demo) -> None:
     """Mode 1 assigned to 190 Hz, checked by the exact model and a grid search (Sec. 3.3)."""
-    from pinflex.assignment.benchmark_a import PAPER, assign_mode1, grid_check
+    from pinflex.cases.benchmark_a import PAPER, assign_mode1, grid_check
 
     result = assign_mode1(demo.model, demo.trajectory)
     demo.results["assignment"] = result
@@ -153,7 +153,7 @@ def vibration_section(demo: Demo) -> None:
     """Tip vibration of the baseline and the assigned design (unless ``--no-vibration``)."""
     if getattr(demo.args, "no_vibration", False):
         return
-    from pinflex.dynamics.demo import vibration_demo
+    from pinflex.cases.vibration_demo import vibration_demo
 
     demo.report["vibration"] = vibration_demo(demo.model, demo.trajectory,
                                               demo.results["assignment"], demo.out_dir, demo.say)
@@ -171,7 +171,7 @@ SECTIONS: list[Callable[[Demo], None]] = [
 
 def cmd_demo(args: argparse.Namespace) -> int:
     """Run ``pinflex demo``: benchmark A end to end, beside paper 000's figures."""
-    from pinflex.assignment.benchmark_a import PAPER, benchmark_model, benchmark_trajectory
+    from pinflex.cases.benchmark_a import PAPER, benchmark_model, benchmark_trajectory
 
     t_all = time.perf_counter()
     out_dir = output_dir(Path(args.out))

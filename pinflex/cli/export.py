@@ -36,7 +36,7 @@ def cmd_export(args: argparse.Namespace) -> int:
                           joints=args.joints)
     times = None
     if args.trajectory:
-        from pinflex.native.along import trajectory_for
+        from pinflex.erls.along import trajectory_for
         from pinflex.trajectory import Trajectory
 
         traj = Trajectory.from_csv(args.trajectory)

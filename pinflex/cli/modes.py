@@ -104,7 +104,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
 
 
 def _along(model, args: argparse.Namespace) -> int:
-    from pinflex.native.along import modes_along
+    from pinflex.erls.along import modes_along
     from pinflex.trajectory import Trajectory
 
     traj = Trajectory.from_csv(args.trajectory)

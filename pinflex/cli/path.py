@@ -42,7 +42,7 @@ def cmd_path(args: argparse.Namespace) -> int:
     """Run ``pinflex path``."""
     from pinflex.erls import FlexibleModel
     from pinflex.exceptions import ConfigurationError
-    from pinflex.native.workspace import path_from_spec
+    from pinflex.trajectory.cartesian import path_from_spec
 
     model = FlexibleModel(args.urdf, values=parse_values(args.set), joints=args.joints)
     orientation: object = args.orientation

@@ -67,7 +67,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     vis = None if args.html else served_visualizer()
     progress = not args.no_progress and sys.stderr.isatty()
     if args.trajectory:
-        from pinflex.native.along import trajectory_for
+        from pinflex.erls.along import trajectory_for
         from pinflex.trajectory import Trajectory
 
         traj = Trajectory.from_csv(args.trajectory)

@@ -11,6 +11,7 @@ from pinflex.erls.modal import ModalResult
 from pinflex.erls.model import FlexibleModel, NodePlacement
 from pinflex.erls.terms import (
     PLANAR_NODE_DOFS,
+    Algebra,
     Attachment,
     BatchAlgebra,
     BeamPlan,
@@ -24,6 +25,7 @@ from pinflex.erls.workspace import FlexibleData
 
 __all__ = [
     "PLANAR_NODE_DOFS",
+    "Algebra",
     "Attachment",
     "BatchAlgebra",
     "BeamPlan",

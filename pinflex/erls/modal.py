@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.erls import joints, solve
+from pinflex.erls import eigensolve, joints, one_pose, solve
 from pinflex.erls.terms import BatchAlgebra
 from pinflex.exceptions import ConfigurationError, EigenSolverError
 from pinflex.linalg import rotate_twist
@@ -135,17 +135,17 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
             f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
         )
     _check_n_modes(n_modes)
-    layout = solve.one_pose_layout(model, data) if single and y.ndim == 1 else None
+    layout = one_pose.one_pose_layout(model, data) if single and y.ndim == 1 else None
     if layout is not None:  # one pose: one product S^T W S instead of the block assembly
         terms = model.pose_terms_one(Q, data=data)
-        twist = solve.root_twists_one(model, solve.solve_plan(model, data), terms, data)
-        M = solve.mass_one(model, layout, terms, twist, y)[0]
+        twist = one_pose.root_twists_one(model, solve.solve_plan(model, data), terms, data)
+        M = one_pose.mass_one(model, layout, terms, twist, y)[0]
 
         def pencil1():
             Mi, Ki = model.matrices_from_terms(terms, y, 1)
             return (*reduced(model, Mi[0], Ki[0]), Mi[0])
 
-        lam = solve.eigvals_one(model, M, n_modes, pencil1)
+        lam = eigensolve.eigvals_one(model, M, n_modes, pencil1)
         return np.sqrt(lam) / (2.0 * np.pi)
     terms = model.pose_terms(Qb, data=data)
     M = solve.mass(model, terms, y, Qb.shape[0], data=data)
@@ -154,7 +154,7 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
         Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)
         return (*reduced(model, Mi[0], Ki[0]), Mi[0])
 
-    lam = solve.eigvals(model, M, n_modes, pencil)
+    lam = eigensolve.eigvals(model, M, n_modes, pencil)
     f = np.sqrt(lam) / (2.0 * np.pi)
     return f[0] if single else f
 
@@ -239,10 +239,10 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
     _check_n_modes(n_modes)
     terms, placements = model.pose_terms_and_placements(q, data=data)
     plan = solve.solve_plan(model, data)
-    twist = solve.root_twists_one(model, plan, terms, data)
-    layout = solve.one_pose_layout(model, data) if y.ndim == 1 else None
+    twist = one_pose.root_twists_one(model, plan, terms, data)
+    layout = one_pose.one_pose_layout(model, data) if y.ndim == 1 else None
     if layout is not None:
-        M, S = solve.mass_one(model, layout, terms, twist, y)
+        M, S = one_pose.mass_one(model, layout, terms, twist, y)
     else:
         M = solve.mass(model, terms, y, 1, data=data)[0]
 
@@ -250,7 +250,7 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
         Mx, Kx = model.matrices_from_terms(terms, y, 1)
         return (*reduced(model, Mx[0], Kx[0]), Mx[0])
 
-    lam, sw, sx = solve.eigvecs(model, M, n_modes, pencil)
+    lam, sw, sx = eigensolve.eigvecs(model, M, n_modes, pencil)
     if not sx.shape[1]:  # every mode from the inverse form: fields straight from [w; q]
         if layout is not None:
             shapes, positions, motion, elastic = _layout_fields(model, layout, S, placements,
@@ -262,7 +262,7 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
             q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
             node_positions=positions, node_motion=motion, node_elastic=elastic,
         )
-    shapes = np.concatenate([solve.to_nodal(model, twist, sw, data), sx], axis=1)
+    shapes = np.concatenate([eigensolve.to_nodal(model, twist, sw, data), sx], axis=1)
     nx = model.nx
     k = lam.size
     # sign: largest elastic component positive
@@ -281,7 +281,7 @@ def _layout_fields(model, layout, S: np.ndarray, placements, sw: np.ndarray):
 
     ``Z = S sw`` holds each beam's own coordinates, root twist and frame twist per mode; the
     nodal coordinates ``X Z`` and the node twists (beam axes) ``A Z`` and ``A_el Z`` (without
-    the frame motion) come from one product ``F Z`` (rows of :class:`solve.OnePoseLayout`);
+    the frame motion) come from one product ``F Z`` (rows of :class:`one_pose.OnePoseLayout`);
     each node's 3-vectors are then turned to world axes, one product per beam.
     """
     nx = model.nx
@@ -309,7 +309,7 @@ def _solver_fields(model, plan, twist, terms, placements, sw: np.ndarray):
 
     The elastic node twists of a link (beam axes) are ``C w_link + R (e w)`` (``e`` the
     solver-coordinate root twist), the link's nodal coordinates ``x`` are their kept rows: one
-    product per link gives both the shapes over ``[x; q]`` (as :func:`solve.to_nodal`) and
+    product per link gives both the shapes over ``[x; q]`` (as :func:`eigensolve.to_nodal`) and
     the nodal motion (as :func:`node_fields`). Signs as in :func:`modes`: largest elastic
     component positive.
 

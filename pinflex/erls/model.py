@@ -413,9 +413,9 @@ class FlexibleModel:
 
             arm = FlexibleModel.from_pinocchio(robot, flexible={"upper_arm_link": Beam(...)})
         """
-        from pinflex.native.robots import from_pinocchio
+        from pinflex.native.robots import describe_pinocchio
 
-        return from_pinocchio(model_or_robot, flexible, masses, joints, **kwargs)
+        return cls(describe_pinocchio(model_or_robot, flexible, masses), joints=joints, **kwargs)
 
     def effective_inertias(self) -> dict:
         """Rigid-body inertia of every flexible link as the modal model sees it.
@@ -426,7 +426,7 @@ class FlexibleModel:
         Returns:
             ``{link: pinocchio.Inertia}`` at the link frame origin in link axes [kg, m, kg m²].
         """
-        from pinflex.native.effective import effective_inertias
+        from pinflex.erls.effective import effective_inertias
 
         return effective_inertias(self)
 
@@ -440,7 +440,7 @@ class FlexibleModel:
             y: Design values [kg] of design point masses (default: nominal).
             point_masses: Add the point masses to the links carrying them.
         """
-        from pinflex.native.effective import effective_model
+        from pinflex.erls.effective import effective_model
 
         return effective_model(self, y, point_masses=point_masses)
 
@@ -998,7 +998,7 @@ class FlexibleModel:
 
         Batched: all poses are assembled and solved together. Frequencies are sorted at each
         pose, so mode ``i`` is the ``i``-th lowest, not a mode followed by its shape (for that,
-        see :mod:`pinflex.tracking` where available).
+        see :mod:`pinflex.erls.tracking` where available).
 
         Args:
             Q: Joint coordinates, one pose (nv,) or many (n, nv), in the user convention

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -214,8 +214,34 @@ class PoseTerms:
     slide: dict[str, np.ndarray] = field(default_factory=dict)
 
 
+class Algebra(Protocol):
+    """The arithmetic of the leading axis of the assembly: poses, or Taylor coefficients.
+
+    :class:`BatchAlgebra` (poses) and the jet algebras of :mod:`pinflex.parametric.algebra`
+    (Taylor coefficients) follow it; every assembly route runs on any of them.
+
+    Attributes:
+        size: Length of the leading axis (poses, or Taylor coefficients).
+        const_at: Where a constant sits on it: ``slice(None)`` (every pose) or ``0`` (the
+            constant coefficient only).
+    """
+
+    size: int
+    const_at: int | slice
+
+    def const(self, c: np.ndarray) -> np.ndarray:
+        """A constant array on the leading axis, (size, *c.shape)."""
+        ...
+
+    def mm(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Product of two arrays that both vary along the leading axis."""
+        ...
+
+
 class BatchAlgebra:
-    """Plain arrays with a leading pose axis."""
+    """Plain arrays with a leading pose axis (the :class:`Algebra` of poses)."""
+
+    const_at = slice(None)
 
     def __init__(self, size: int):
         """Algebra of arrays with ``size`` poses on the leading axis.

@@ -1,12 +1,15 @@
-"""Flexible models from Pinocchio models in memory and from example-robot-data arms."""
+"""Descriptions of arms held in memory: Pinocchio models, example-robot-data, Python specs.
+
+Each function returns a :class:`~pinflex.description.RobotDescription`; the models are built
+from them by :meth:`pinflex.FlexibleModel.from_pinocchio` and :func:`pinflex.example_robot`.
+"""
 
 from __future__ import annotations
 
-import inspect
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from pinflex.description import NAMESPACE, apply_overlay, parse, robot_data_dir
+from pinflex.description import NAMESPACE, RobotDescription, apply_overlay, parse, robot_data_dir
 from pinflex.exceptions import ConfigurationError, InvalidDescription, LinkNotFound
 from pinflex.native.spec import Beam, Mass, annotation_elements
 
@@ -36,24 +39,6 @@ def _overlay(elements: list[ET.Element], name: str | None) -> ET.Element:
     return root
 
 
-def _model_kwargs(joints, kwargs: dict) -> dict:
-    """FlexibleModel keyword arguments, with ``joints`` passed on when the model takes it."""
-    from pinflex.erls import FlexibleModel
-
-    out = dict(kwargs)
-    if joints is None:
-        return out
-    if "joints" in inspect.signature(FlexibleModel.__init__).parameters:
-        out["joints"] = joints
-        return out
-    if joints != "free":
-        raise ConfigurationError(
-            f"joints={joints!r}: this version of pinflex models every joint as free "
-            "(no joint stiffness); use joints='free' or None"
-        )
-    return out
-
-
 def _resolve_keys(desc_xml: str, flexible, masses) -> tuple[dict, dict]:
     """Accept joint names for flexible links (the link a joint carries); check link names."""
     probe = parse(desc_xml)
@@ -71,36 +56,40 @@ def _resolve_keys(desc_xml: str, flexible, masses) -> tuple[dict, dict]:
     return flex, dict(masses or {})
 
 
-def model_from_urdf_text(
+def description_from_urdf_text(
     urdf_xml: str,
     *,
     base_dir: Path | None,
     flexible: dict[str, Beam] | None,
     masses: dict[str, Mass] | None,
-    joints=None,
     name: str | None = None,
-    coordinates: str | None = None,
-    **kwargs,
-):
-    """FlexibleModel of URDF text plus Python specifications (the overlay route in memory)."""
-    from pinflex.erls import FlexibleModel
+) -> RobotDescription:
+    """Description of URDF text plus Python specifications (the overlay route in memory).
 
+    Args:
+        urdf_xml: URDF text.
+        base_dir: Folder for relative mesh paths, or None.
+        flexible: ``{link or joint name: Beam}``; a joint name stands for the link it carries.
+        masses: ``{name: Mass}`` point masses.
+        name: Robot name of the overlay (default: the URDF's).
+    """
     flex, mass = _resolve_keys(urdf_xml, flexible, masses)
     overlay = _overlay(annotation_elements(flex, mass), name)
-    desc = parse(apply_overlay(urdf_xml, overlay), base_dir=base_dir)
-    return FlexibleModel(desc, coordinates=coordinates, **_model_kwargs(joints, kwargs))
+    return parse(apply_overlay(urdf_xml, overlay), base_dir=base_dir)
 
 
-def from_pinocchio(
+def describe_pinocchio(
     model_or_robot,
     flexible: dict[str, Beam] | None = None,
     masses: dict[str, Mass] | None = None,
-    joints=None,
-    **kwargs,
-):
-    """A :class:`~pinflex.FlexibleModel` of a Pinocchio model or ``RobotWrapper`` in memory.
+) -> RobotDescription:
+    """Description of a Pinocchio model or ``RobotWrapper`` in memory plus Python specifications.
 
-    See :meth:`pinflex.FlexibleModel.from_pinocchio`.
+    The model's tree and inertias are written out as URDF (:func:`urdf_from_model`) and
+    annotated from the specifications (see :meth:`pinflex.FlexibleModel.from_pinocchio`).
+
+    Raises:
+        ConfigurationError: Not a ``pinocchio.Model`` nor a ``RobotWrapper``.
     """
     import pinocchio as pin
 
@@ -112,10 +101,8 @@ def from_pinocchio(
             "from_pinocchio expects a pinocchio.Model or a pinocchio RobotWrapper, got "
             f"{type(model_or_robot).__name__}"
         )
-    text = urdf_from_model(model)
-    return model_from_urdf_text(
-        text, base_dir=None, flexible=flexible, masses=masses, joints=joints, **kwargs
-    )
+    return description_from_urdf_text(urdf_from_model(model), base_dir=None, flexible=flexible,
+                                      masses=masses)
 
 
 def example_robot_urdf(name: str) -> Path:
@@ -137,45 +124,20 @@ def example_robot_urdf(name: str) -> Path:
     return path
 
 
-def example_robot(
+def describe_example_robot(
     name: str,
     flexible: dict[str, Beam] | None = None,
     masses: dict[str, Mass] | None = None,
-    joints=None,
-    **kwargs,
-):
-    """A flexible model of an example-robot-data arm, without writing an overlay file.
+) -> RobotDescription:
+    """Description of an example-robot-data arm plus Python specifications.
 
-    The result is the model that an overlay file with
-    ``base="example-robot-data:<EXAMPLE_ROBOTS[name]>"`` and the same annotations gives.
-
-    Args:
-        name: Short name (``"ur10"``, ``"ur5"``, ``"panda"``, ``"kinova"``, ... see
-            :data:`EXAMPLE_ROBOTS`) or a ``.urdf`` path inside example-robot-data's
-            ``robots/`` folder.
-        flexible: Flexible links ``{link or joint name: Beam}``; a joint name stands for the
-            link it carries.
-        masses: Point masses ``{name: Mass}``.
-        joints: Joint conditions of the modal model, as for :class:`~pinflex.FlexibleModel`
-            (``"free"``, ``"locked"``, ``"annotated"`` or ``{joint: "free" | "locked" |
-            stiffness}``); default free.
-        **kwargs: Passed to :class:`~pinflex.FlexibleModel` (``planar``, ``values``,
-            ``coordinates``).
-
-    Returns:
-        A :class:`~pinflex.FlexibleModel`.
+    The description an overlay file with ``base="example-robot-data:<EXAMPLE_ROBOTS[name]>"``
+    and the same annotations gives (see :func:`pinflex.example_robot`).
 
     Raises:
         InvalidDescription: Unknown robot, example-robot-data missing, bad specification.
         LinkNotFound: A flexible link or a mass's link is not in the URDF.
     """
     path = example_robot_urdf(name)
-    return model_from_urdf_text(
-        path.read_text(),
-        base_dir=path.parent,
-        flexible=flexible,
-        masses=masses,
-        joints=joints,
-        name=None,
-        **kwargs,
-    )
+    return description_from_urdf_text(path.read_text(), base_dir=path.parent,
+                                      flexible=flexible, masses=masses, name=None)

@@ -88,7 +88,7 @@ def _spatial(inertia: pin.Inertia) -> np.ndarray:
     return np.array(inertia.matrix())
 
 
-def _from_spatial(S: np.ndarray) -> pin.Inertia:
+def inertia_from_spatial(S: np.ndarray) -> pin.Inertia:
     """pin.Inertia of a 6x6 spatial inertia (linear, angular) at the frame origin."""
     m = float(S[0, 0])
     if m <= 1e-14 * max(1.0, float(np.abs(S).max())):
@@ -183,7 +183,7 @@ def urdf_from_model(model: pin.Model, name: str | None = None) -> str:
     for link in link_placement:
         el = ET.SubElement(robot, "link", {"name": link})
         if link in own:
-            _inertial(el, _from_spatial(own[link]))
+            _inertial(el, inertia_from_spatial(own[link]))
     for j in range(1, model.njoints):
         jm = model.joints[j]
         kind, axis = _joint_kind(jm)

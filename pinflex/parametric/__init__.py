@@ -18,9 +18,10 @@ the model's convention, then design values [kg]. Only the joints and design vari
 for are expanded; the others stay at their expansion values.
 """
 
+from pinflex.parametric.algebra import JetAlgebra
 from pinflex.parametric.along import SampledTaylor, TrajectoryExpansion, expand_along, sample
 from pinflex.parametric.eigen import radius_estimate
-from pinflex.parametric.matrices import JetAlgebra, matrix_jets, pose_jets
+from pinflex.parametric.matrices import matrix_jets, pose_jets
 from pinflex.parametric.model import TaylorModel, expand
 
 __all__ = [

@@ -1,6 +1,6 @@
-"""Compiled evaluation of two-joint Taylor models (see ``model._PowerGrid``).
+"""Compiled evaluation of two-joint Taylor models (see ``evaluation.PowerGrid``).
 
-Imported only by :func:`pinflex.parametric.model.prepare_kernel`, which
+Imported only by :func:`pinflex.parametric.evaluation.prepare_kernel`, which
 :meth:`pinflex.parametric.TaylorModel.evaluate` runs in a background thread after a process's
 first ``KERNEL_AFTER`` two-joint evaluations (or a caller runs at once), so nothing else pays
 for numba. One call builds the powers of both offsets, contracts them with the coefficient

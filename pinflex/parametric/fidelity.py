@@ -33,13 +33,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
 from pinflex.jets.evaluation import monomial_rows
-from pinflex.parametric.model import TaylorModel, expand
+from pinflex.parametric.expansion import expand_at_order as expand
+from pinflex.parametric.taylor import TaylorModel
 from pinflex.resources import MAX_TAYLOR_ORDER
 
 TWO_TERM_RULE = ("two-term estimate max(|T_(p+1) - T_p| / |T_(p+1)|, "
@@ -172,3 +174,22 @@ def order_for_tolerance(model: FlexibleModel, q0, y0=None, *, Q, Y=None, tol: fl
         f"no Taylor order in {allowed} meets tol = {tol:g} on these samples (best: order "
         f"{best}, two-term estimate {estimates[best]:.3g}); expand closer or use several "
         "expansion points (pinflex.parametric.expand_along)")
+
+
+def expand_for_tolerance(model, q0, y0, order, modes, joints, design, tol, over):
+    """:func:`pinflex.parametric.expand` with ``tol``: the order from two-term estimates."""
+    import dataclasses
+
+    if over is None:
+        raise ConfigurationError("expand(tol=...) needs over=Q (or (Q, Y)): the samples where "
+                                 "the model will be used")
+    Q, Y = over if isinstance(over, tuple) else (over, None)
+    cap = max(1, int(order)) if order is not None else 8
+    choice = order_for_tolerance(model, q0, y0, Q=Q, Y=Y, tol=tol, modes=modes,
+                                 orders=range(1, cap + 1), joints=joints, design=design)
+    info = MappingProxyType({"tol": choice.tol, "order": choice.order,
+                             "estimate": choice.estimate,
+                             "estimates": MappingProxyType(dict(choice.estimates)),
+                             "method": f"{TWO_TERM_RULE}, frequency [Hz], max over "
+                                       "samples and modes"})
+    return dataclasses.replace(choice.model, order_choice=info)

@@ -11,43 +11,9 @@ from pinflex.erls import BatchAlgebra, FlexibleModel, PoseTerms
 from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
 from pinflex.jets import JetSpace
 from pinflex.linalg import axis_rotation, skew
+from pinflex.parametric.algebra import JetAlgebra
 from pinflex.parametric.design import add_jets as add_design_jets
 from pinflex.resources import check_order, check_taylor
-
-
-class JetAlgebra:
-    """Taylor coefficients on the leading axis (see :class:`pinflex.erls.BatchAlgebra`)."""
-
-    def __init__(self, space: JetSpace):
-        """Algebra of the jets of ``space``.
-
-        Args:
-            space: The jet space (variables and truncation order) of every operand.
-        """
-        self.space = space
-
-    def const(self, c: np.ndarray) -> np.ndarray:
-        """Jet of a constant array.
-
-        Args:
-            c: The constant, any shape.
-
-        Returns:
-            Jet (ncoef, *c.shape) with only the constant coefficient set.
-        """
-        return jets.constant(self.space, c)
-
-    def mm(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Truncated product of two matrix jets.
-
-        Args:
-            a: Jet (ncoef, ..., n, m).
-            b: Jet (ncoef, ..., m, r), or (ncoef, m) for a vector.
-
-        Returns:
-            Jet of ``a @ b`` (ncoef, ..., n, r), truncated at the space's order.
-        """
-        return jets.matmul(self.space, a, b)
 
 
 def _angle_terms(model: FlexibleModel, joint_vars: dict[int, int], col: int):
@@ -83,7 +49,7 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
         q0: Expansion pose in user coordinates, (nv,).
         joint_vars: Map user joint index -> jet variable index of the expanded joints.
         alg: Jet algebra of the products (default :class:`JetAlgebra`, dense; a
-            :class:`~pinflex.parametric.conditioned.SparseJetAlgebra` skips zero
+            :class:`~pinflex.parametric.algebra.SparseJetAlgebra` skips zero
             coefficients: a joint's rotation depends on one variable, a frame's Jacobian on
             the joints upstream of it).
     """

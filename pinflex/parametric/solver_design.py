@@ -36,8 +36,9 @@ import numpy as np
 
 from pinflex import beam
 from pinflex.erls import design as erls_design
-from pinflex.erls import solve
+from pinflex.erls import eigensolve, solve
 from pinflex.jets import JetSpace
+from pinflex.parametric.algebra import SparseJetAlgebra
 from pinflex.parametric.design import _separable_pairs, channel_jets
 
 _K_NAMES = ("EA", "GJ", "EIy", "EIz")
@@ -254,8 +255,6 @@ def _eliminate_locks(model, space: JetSpace, terms, salg, twists, sources, emb, 
     congruence is a column scatter plus one thin jet product. ``K = None`` is the constant
     ``blockdiag(I, 0)``, which ``T`` keeps (its ``w`` rows are ``[I, 0]``).
     """
-    from pinflex.parametric.conditioned import SparseJetAlgebra
-
     nx = model.nx
     nd = nx + model.nv
     ndof = model.ndof
@@ -331,7 +330,7 @@ def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
         B = Mue
     mu, U = np.linalg.eigh(0.5 * (B + B.T))
     mu, U = mu[::-1], U[:, ::-1]
-    bad = ~(mu > solve.noise_level(mu))
+    bad = ~(mu > eigensolve.noise_level(mu))
     if np.any(bad):
         raise ConfigurationError(
             f"the highest {int(bad.sum())} modes at the expansion point are not resolved in "

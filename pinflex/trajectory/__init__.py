@@ -13,20 +13,12 @@ Conventions:
   link angles. :func:`absolute_to_relative` and :func:`relative_to_absolute` convert.
 * Workspace paths live in the x–y plane of the world frame [m]; planar arms turn about z.
 
-Benchmark A (SPEC §5) is built without the modal model: :func:`planar_2r_ik` inverts the
-planar two-link arm in closed form and :func:`benchmark_a_trajectory` returns the 152-sample
-pick-and-place motion through the paper's expansion point ``q0``. The Pinocchio solver
-:func:`solve_ik` handles any model and is checked against the closed form in the tests.
+:func:`planar_2r_ik` inverts the planar two-link arm in closed form (benchmark A's
+pick-and-place motion, :mod:`pinflex.cases.benchmark_a_path`, is built with it). The
+Pinocchio solver :func:`solve_ik` handles any model and is checked against the closed form
+in the tests.
 """
 
-from pinflex.trajectory.benchmark_a import (
-    BENCHMARK_A_L1_M,
-    BENCHMARK_A_L2_M,
-    BENCHMARK_A_Q0_ABS,
-    BENCHMARK_A_Q0_SAMPLE,
-    benchmark_a_path,
-    benchmark_a_trajectory,
-)
 from pinflex.trajectory.ik import (
     IKSolution,
     absolute_to_relative,
@@ -39,16 +31,10 @@ from pinflex.trajectory.paths import WorkspacePath, workspace_path
 from pinflex.trajectory.samples import Trajectory, trapezoid_weights
 
 __all__ = [
-    "BENCHMARK_A_L1_M",
-    "BENCHMARK_A_L2_M",
-    "BENCHMARK_A_Q0_ABS",
-    "BENCHMARK_A_Q0_SAMPLE",
     "IKSolution",
     "Trajectory",
     "WorkspacePath",
     "absolute_to_relative",
-    "benchmark_a_path",
-    "benchmark_a_trajectory",
     "planar_2r_fk",
     "planar_2r_ik",
     "relative_to_absolute",

@@ -62,7 +62,7 @@ class _Piece:
         return self.center + self.radius * np.column_stack([np.cos(angle), np.sin(angle)])
 
 
-def _parse_pieces(start: ArrayLike, segments: Sequence[tuple]) -> list[_Piece]:
+def parse_pieces(start: ArrayLike, segments: Sequence[tuple]) -> list[_Piece]:
     """Turn the segment spec of :func:`workspace_path` into geometric pieces."""
     current = np.asarray(start, dtype=float)
     if current.shape != (2,):
@@ -129,7 +129,8 @@ def _parse_pieces(start: ArrayLike, segments: Sequence[tuple]) -> list[_Piece]:
     return pieces
 
 
-def _timing(tau: np.ndarray, profile: str) -> np.ndarray:
+def path_timing(tau: np.ndarray, profile: str) -> np.ndarray:
+    """Arc-length fraction at normalised times ``tau`` in [0, 1] for a timing ``profile``."""
     if profile == "uniform":
         return tau
     if profile == "minimum_jerk":
@@ -178,12 +179,12 @@ def workspace_path(
         raise InvalidPath(f"n_samples must be >= 2, got {n_samples}")
     if not duration_s > 0.0:
         raise InvalidPath(f"duration_s must be positive, got {duration_s!r}")
-    pieces = _parse_pieces(start, segments)
+    pieces = parse_pieces(start, segments)
     lengths = np.array([p.length for p in pieces])
     cumulative = np.concatenate([[0.0], np.cumsum(lengths)])
     total = float(cumulative[-1])
     times = np.linspace(0.0, duration_s, int(n_samples))
-    s = total * _timing(times / duration_s, profile)
+    s = total * path_timing(times / duration_s, profile)
     segment = np.clip(np.searchsorted(cumulative, s, side="right") - 1, 0, len(pieces) - 1)
     points = np.empty((s.size, 2))
     for n, piece in enumerate(pieces):

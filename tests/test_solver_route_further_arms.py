@@ -17,6 +17,7 @@ from conftest import TWO_LINK
 
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel
+from pinflex.erls.tracking import track_modes
 from pinflex.exceptions import (
     ConfigurationError,
     PinflexWarning,
@@ -25,7 +26,6 @@ from pinflex.exceptions import (
 )
 from pinflex.parametric import expand, matrix_jets
 from pinflex.parametric.eigen import eigen_jets
-from pinflex.tracking import track_modes
 
 PANDA = """<?xml version="1.0"?>
 <pinflex:overlay xmlns:pinflex="urn:pinflex:urdf:1" name="panda_designed"

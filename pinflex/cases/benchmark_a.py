@@ -18,9 +18,10 @@ import numpy as np
 
 from pinflex.assignment.brute import BruteForceResult, brute_force, exact_cost
 from pinflex.assignment.driver import AssignmentResult, Target, assign_frequencies
+from pinflex.cases.benchmark_a_path import BENCHMARK_A_Q0_ABS
 from pinflex.erls import FlexibleModel
 from pinflex.parametric import TaylorModel, expand
-from pinflex.trajectory import BENCHMARK_A_Q0_ABS, Trajectory
+from pinflex.trajectory import Trajectory
 
 #: Expansion pose q0 [rad] (absolute link angles, the model's user coordinates).
 Q0 = np.array(BENCHMARK_A_Q0_ABS)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from pinflex.native.urdf import _from_spatial
+from pinflex.native.urdf import inertia_from_spatial
 
 
 def beam_spatial_inertia(plan) -> np.ndarray:
@@ -26,7 +26,8 @@ def beam_spatial_inertia(plan) -> np.ndarray:
 
 def effective_inertias(arm) -> dict[str, pin.Inertia]:
     """``{flexible link: pin.Inertia}`` of the beams at the link origin in link axes."""
-    return {link: _from_spatial(beam_spatial_inertia(p)) for link, p in arm.plan.beams.items()}
+    return {link: inertia_from_spatial(beam_spatial_inertia(p))
+            for link, p in arm.plan.beams.items()}
 
 
 def effective_model(arm, y=None, *, point_masses: bool = True) -> pin.Model:
@@ -49,7 +50,7 @@ def effective_model(arm, y=None, *, point_masses: bool = True) -> pin.Model:
         moved = np.array(f.placement.act(inertia).matrix())
         j = f.parentJoint
         total = np.array(model.inertias[j].matrix()) + sign * moved
-        model.inertias[j] = _from_spatial(total)
+        model.inertias[j] = inertia_from_spatial(total)
 
     for link, inertia in effective_inertias(arm).items():
         urdf = desc.inertias.get(link)

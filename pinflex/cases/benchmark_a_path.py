@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from pinflex.trajectory.ik import absolute_to_relative, planar_2r_fk, planar_2r_ik
-from pinflex.trajectory.paths import WorkspacePath, _parse_pieces, _timing, workspace_path
+from pinflex.trajectory.paths import WorkspacePath, parse_pieces, path_timing, workspace_path
 from pinflex.trajectory.samples import Trajectory
 
 BENCHMARK_A_L1_M = 0.6
@@ -82,11 +82,11 @@ def benchmark_a_path(n_samples: int = 152, duration_s: float = 1.51) -> Workspac
         The sampled :class:`WorkspacePath`.
     """
     tau = BENCHMARK_A_Q0_SAMPLE / 151.0
-    target = float(_timing(np.array(tau), "minimum_jerk"))
+    target = float(path_timing(np.array(tau), "minimum_jerk"))
 
     def mismatch(x_pick: float) -> float:
         start, segments, s_p0 = _benchmark_a_pieces(x_pick)
-        lengths = [p.length for p in _parse_pieces(start, segments)]
+        lengths = [p.length for p in parse_pieces(start, segments)]
         return s_p0 / sum(lengths) - target
 
     from scipy.optimize import brentq

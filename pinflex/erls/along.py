@@ -2,7 +2,7 @@
 
 :func:`modes_along` evaluates the modal model at every sample of a
 :class:`~pinflex.Trajectory` and follows each requested mode by its shape
-(:func:`pinflex.tracking.track_modes`, mass-weighted MAC), so that "mode 2" is the same
+(:func:`pinflex.erls.tracking.track_modes`, mass-weighted MAC), so that "mode 2" is the same
 physical mode along the whole motion even where two modes cross. Mode numbers are the sorted
 numbers at the first sample. The result carries the tracked and the sorted frequencies, the
 sorted number of each tracked mode at each sample, the MAC of each step and the crossing /
@@ -212,8 +212,8 @@ def modes_along(
     Returns:
         :class:`ModesAlong`.
     """
-    from pinflex.native.workspace import check_joint_limits
-    from pinflex.tracking import track_modes
+    from pinflex.erls.tracking import track_modes
+    from pinflex.trajectory.cartesian import check_joint_limits
 
     Q = trajectory_for(arm, trajectory)
     if check_limits is not None:

@@ -101,7 +101,7 @@ class ModeEvent:
     """One event along a tracked motion.
 
     Attributes:
-        kind: ``"crossing"``, ``"veering"`` or ``"ambiguous"`` (see :mod:`pinflex.tracking`).
+        kind: ``"crossing"``, ``"veering"`` or ``"ambiguous"`` (see :mod:`pinflex.erls.tracking`).
         sample: Trajectory sample of the event (for a crossing, the first sample after it).
         modes: Reference mode numbers involved (1 = lowest at the reference); one number for
             ``"ambiguous"``.
@@ -121,7 +121,7 @@ class ModeEvent:
 
 @dataclass(frozen=True)
 class ModeTracking:
-    """Modes followed by shape along a motion (see :mod:`pinflex.tracking`).
+    """Modes followed by shape along a motion (see :mod:`pinflex.erls.tracking`).
 
     Attributes:
         modes: Reference mode numbers reported in ``freq_hz`` (1 = lowest at the reference).
@@ -318,7 +318,7 @@ def solver_eigenpairs(model, Q, y, *, n_modes: int, one_pose: bool = False):
         the samples (None with ``one_pose``). None when the conditioned solve does not
         cover the model or does not resolve one of the modes (then use :func:`eigenpairs`).
     """
-    from pinflex.erls import solve
+    from pinflex.erls import eigensolve, solve
 
     if not solve.supported(model):
         return None
@@ -332,13 +332,13 @@ def solver_eigenpairs(model, Q, y, *, n_modes: int, one_pose: bool = False):
     else:
         terms = model.pose_terms(Q)
         M = solve.mass(model, terms, y, ns)
-    B, _, _ = solve.condense(model, M)
+    B, _, _ = eigensolve.condense(model, M)
     mu, V = np.linalg.eigh(B)
     if not np.all(np.isfinite(mu)):
         raise EigenSolverError("a non-finite eigenvalue appeared along the samples: the mass "
                                "of the model is not finite")
     top = mu[:, ::-1][:, :k]
-    if np.any(top <= solve.noise_level(mu)[:, None]):
+    if np.any(top <= eigensolve.noise_level(mu)[:, None]):
         return None  # a requested mode below the inverse form's rounding level
     V = V[:, :, ::-1][:, :, :k]
     pose_map = None if one_pose else PoseMap(model, terms, ns)
