@@ -69,11 +69,9 @@ class Section:
 
 
 def solid_circle(diameter_m: float) -> Section:
-    """Section of a solid circular rod of the given diameter [m]."""
+    """Section of a solid circular rod of the given diameter [m] (:mod:`pinflex.sections`)."""
     _positive("diameter", diameter_m)
-    r = 0.5 * diameter_m
-    i = np.pi * r**4 / 4.0
-    return Section(A=np.pi * r**2, Iy=i, Iz=i, J=2.0 * i)
+    return _section("solid_circle", {"diameter": diameter_m})
 
 
 def hollow_circle(outer_diameter_m: float, inner_diameter_m: float) -> Section:
@@ -84,9 +82,8 @@ def hollow_circle(outer_diameter_m: float, inner_diameter_m: float) -> Section:
             f"inner_diameter = {inner_diameter_m!r} must satisfy 0 <= inner < outer = "
             f"{outer_diameter_m!r} [m]"
         )
-    ro, ri = 0.5 * outer_diameter_m, 0.5 * inner_diameter_m
-    i = np.pi * (ro**4 - ri**4) / 4.0
-    return Section(A=np.pi * (ro**2 - ri**2), Iy=i, Iz=i, J=2.0 * i)
+    return _section("hollow_circle", {"outer_diameter": outer_diameter_m,
+                                      "inner_diameter": inner_diameter_m})
 
 
 def rectangle(width_m: float, height_m: float) -> Section:
@@ -97,11 +94,15 @@ def rectangle(width_m: float, height_m: float) -> Section:
     """
     _positive("width", width_m)
     _positive("height", height_m)
-    b, h = width_m, height_m
-    a_long, a_short = max(b, h), min(b, h)
-    ratio = a_short / a_long
-    j = a_long * a_short**3 * (1.0 / 3.0 - 0.21 * ratio * (1.0 - ratio**4 / 12.0))
-    return Section(A=b * h, Iy=b * h**3 / 12.0, Iz=h * b**3 / 12.0, J=j)
+    return _section("rectangle", {"width": width_m, "height": height_m})
+
+
+def _section(shape: str, dims: dict) -> Section:
+    """The :class:`Section` of a shape, by the one set of formulas in :mod:`pinflex.sections`."""
+    from pinflex.sections import section_properties
+
+    A, Iy, Iz, J = section_properties(shape, dims)
+    return Section(A=float(A), Iy=float(Iy), Iz=float(Iz), J=float(J))
 
 
 def _positive(name: str, value: float) -> None:

@@ -7,7 +7,8 @@ from conftest import TWO_LINK
 
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel, eigensolve, solve
-from pinflex.erls.tracking import PoseMap, mac_matrix, track, track_modes
+from pinflex.erls.eigenpairs import PoseMap
+from pinflex.erls.tracking import mac_matrix, track, track_modes
 from pinflex.exceptions import ConfigurationError
 
 Q0_A = np.array([1.817, 5.312])
@@ -97,7 +98,7 @@ def test_a_crossing_in_solver_coordinates_is_caught_not_matched_by_order(crossin
 def test_benchmark_a_step_macs_need_the_pose_map(two_link):
     """Unmoved solver shapes give another MAC between poses; moved ones give the nodal one."""
     from pinflex.cases.benchmark_a import benchmark_trajectory
-    from pinflex.erls.tracking import solver_eigenpairs
+    from pinflex.erls.eigenpairs import solver_eigenpairs
 
     Q = benchmark_trajectory(two_link).q[::8]
     y = two_link.check_y(np.array([0.2, 0.05]))

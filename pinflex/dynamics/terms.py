@@ -48,7 +48,7 @@ import pinocchio as pin
 
 from pinflex import beam
 from pinflex.erls.plan import attachment
-from pinflex.erls.terms import offset_block
+from pinflex.erls.terms import joint_step, joint_step_rate
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
 
@@ -392,26 +392,14 @@ def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
         if tau is None:
             tw[j.child] = rate[j.child] = None
             continue
-        zero = np.zeros((nk,) + tau.shape)
-        if j.kind == "revolute":
-            Rt = (j.R_o @ axis_rotation(j.axis, np.array([qrel[j.user_col]]))[0]).T
-            Rt6 = rotate_twist(Rt)
-            dRt6 = rotate_twist(-vrel[j.user_col][:, None, None] * (skew(j.axis) @ Rt))
-            child = Rt6 @ tau
-            childd = dRt6 @ tau + (zero if taud is None else Rt6 @ taud)
-        elif j.kind == "prismatic":
-            s = j.R_o @ j.axis
-            ob = offset_block(s * qrel[j.user_col])
-            dob = np.stack([offset_block(s * v) for v in vrel[j.user_col]])
-            Rt6 = rotate_twist(j.R_o.T)
-            child = Rt6 @ (tau + ob @ tau)
-            childd = Rt6 @ (dob @ tau + (zero if taud is None else taud + ob @ taud))
-        else:
-            Rt6 = rotate_twist(j.R_o.T)
-            child = Rt6 @ tau
-            childd = zero if taud is None else Rt6 @ taud
-        tw[j.child] = j.proj @ child
-        rate[j.child] = j.proj @ childd
+        # the one unique-ERLS rule of the assembly (erls.terms.joint_step) and its rate
+        q_j = qrel[j.user_col] if j.user_col >= 0 else 0.0
+        rot = j.R_o @ axis_rotation(j.axis, np.array([q_j]))[0] if j.kind == "revolute" else None
+        step = joint_step(j, rot, (j.R_o @ j.axis) * q_j)
+        dstep = joint_step_rate(j, rot, vrel[j.user_col] if j.user_col >= 0 else np.zeros(nk))
+        tw[j.child] = step @ tau
+        childd = np.zeros((nk,) + tau.shape) if dstep is None else dstep @ tau
+        rate[j.child] = childd if taud is None else childd + step @ taud
     return tw, rate
 
 

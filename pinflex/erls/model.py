@@ -38,18 +38,15 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex.description import NAMESPACE, RobotDescription, load
+from pinflex.erls import assembly, kinematics, modal
 from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
-from pinflex.erls import modal
 from pinflex.erls.plan import build_plan, coordinate_map
 from pinflex.erls.terms import (
     BatchAlgebra,
     DesignVariable,
     ModelPlan,
     PoseTerms,
-    offset_block,
-    twist_at,
-    zeros_like,
 )
 from pinflex.erls.workspace import FlexibleData, ThreadWorkspaces, check_data
 from pinflex.exceptions import (
@@ -60,7 +57,7 @@ from pinflex.exceptions import (
     InvalidDescription,
     NoFlexibleLink,
 )
-from pinflex.linalg import rotate_twist, skew, translate_twist
+from pinflex.linalg import skew
 from pinflex.resources import check_modal
 from pinflex.validation import require_array, require_count
 
@@ -527,28 +524,7 @@ class FlexibleModel:
             :class:`PoseTerms`: ``jac`` ``{link: (1, 6, nv)}``, ``rot`` ``{joint: (1, 3, 3)}``,
             ``slide`` ``{prismatic joint: (1, 3)}`` [m].
         """
-        if not self.nv:
-            return self.pose_terms(q[None], data=data)
-        model, pdata = self.model, self.workspace(data).pin
-        cmap = self.coord_map
-        qrel = np.dot(cmap, q)
-        pin.computeJointJacobians(model, pdata, self._configuration_of(qrel))
-        names, cols, A0, A1, A2, plain = self._rodrigues
-        jac = {}
-        ids, local, dot = self.plan.frame_ids, pin.LOCAL, np.dot
-        for link in self.plan.carriers:
-            J = pin.getFrameJacobian(model, pdata, ids[link], local)
-            jac[link] = (J if plain else dot(J.reshape(6, -1), cmap)).reshape(1, 6, -1)
-        rot, slide = {}, {}
-        # a revolute joint's rotation R_o Rot(axis, θ): Pinocchio's parent-to-joint placement
-        # of this pass (pose_terms: the same by Rodrigues' formula, batched)
-        liMi = pdata.liMi
-        for name, jid in self._revolute_ids:
-            rot[name] = liMi[jid].rotation[None]
-        for j in self.plan.joints:
-            if j.kind == "prismatic":
-                slide[j.name] = ((j.R_o @ j.axis) * qrel[j.user_col])[None]
-        return PoseTerms(jac, rot, slide)
+        return kinematics.pose_terms_one(self, q, self.workspace(data))
 
     @property
     def design_names(self) -> tuple[str, ...]:
@@ -742,30 +718,7 @@ class FlexibleModel:
             over the user coordinates, ``rot`` ``{revolute joint: (n, 3, 3)}`` child-in-parent
             rotations, ``slide`` ``{prismatic joint: (n, 3)}`` child origin offsets [m].
         """
-        model, pdata = self.model, self.workspace(data).pin
-        n = Q.shape[0]
-        jac = {link: np.zeros((n, 6, self.nv)) for link in self.plan.carriers}
-        fids = [(link, self.plan.frame_ids[link]) for link in self.plan.carriers]
-        for i in range(n if self.nv else 0):
-            qp = self.pin_configuration(Q[i])
-            pin.computeJointJacobians(model, pdata, qp)
-            for link, fid in fids:
-                jac[link][i] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL).reshape(6, -1)
-        names, cols, A0, A1, A2, plain = self._rodrigues
-        if not plain:
-            for link in jac:
-                jac[link] = jac[link] @ self.coord_map
-        qrel = Q @ self.coord_map.T
-        rot, slide = {}, {}
-        if names:  # R_o R(axis, angle) = R_o + sin R_o K + (1 - cos) R_o K^2, all joints at once
-            angle = qrel[:, cols][..., None, None]
-            R = A0 + np.sin(angle) * A1 + (1.0 - np.cos(angle)) * A2
-            for i, name in enumerate(names):
-                rot[name] = R[:, i]
-        for j in self.plan.joints:
-            if j.kind == "prismatic":
-                slide[j.name] = (j.R_o @ j.axis)[None, :] * qrel[:, j.user_col, None]
-        return PoseTerms(jac, rot, slide)
+        return kinematics.pose_terms(self, Q, self.workspace(data))
 
     def assemble(self, terms: PoseTerms, alg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Assemble M without design masses, M per unit design mass, and K.
@@ -783,48 +736,7 @@ class FlexibleModel:
             Units: mass entries [kg, kg m, kg m²], stiffness [N/m, N, N m] per coordinate
             pair; ``Mdesign`` is per kg of each design mass.
         """
-        nx = self.nx
-        nd = nx + self.nv  # [x; q_all]; joint conditions map to the modal coordinates
-        twist = self.root_twists(terms, alg)
-        M = None
-        K = None
-        for link, bp in self.plan.beams.items():
-            e = twist[link]
-            sel, root, jac, mass, stiffness = bp.kept
-            bx = alg.const(sel) if e is None else alg.const(sel) + root @ e
-            w = np.concatenate([bx, jac @ terms.jac[link]], axis=-1)
-            m = alg.mm(np.swapaxes(w, -1, -2), mass @ w)
-            k = alg.mm(np.swapaxes(bx, -1, -2), stiffness @ bx)
-            M = m if M is None else M + m
-            K = k if K is None else K + k
-        for link, inertia in self.plan.inertias.items():
-            e = twist[link]
-            jl = terms.jac[link]
-            g = np.concatenate([zeros_like(jl, nx) if e is None else e, jl], axis=-1)
-            m = alg.mm(np.swapaxes(g, -1, -2), inertia @ g)
-            M = m if M is None else M + m
-        design_index = self._mass_design_index
-        carriers = self.plan.carriers
-        shape_b = terms.jac[carriers[0]].shape[:1] if carriers else (1,)
-        Mdesign = np.zeros((self.ny,) + shape_b + (nd, nd))
-        for pm in self.plan.point_masses:
-            name, link, xyz = pm.name, pm.link, pm.xyz
-            jl = terms.jac[link]
-            tau = twist_at(alg, pm.attach, twist[link])
-            g = np.concatenate(
-                [zeros_like(jl, nx) if tau is None else tau, translate_twist(xyz) @ jl], axis=-1
-            )[..., :3, :]
-            m = alg.mm(np.swapaxes(g, -1, -2), g)
-            if name in design_index:
-                Mdesign[design_index[name]] += m
-            else:
-                M = M + self._pm_values[name] * m if M is not None else self._pm_values[name] * m
-        if M is None:
-            M = np.zeros(shape_b + (nd, nd))
-        Kfull = np.zeros(M.shape)
-        if K is not None:
-            Kfull[..., :nx, :nx] = K
-        return joint_conditions.apply(self, terms, alg, twist, M, Mdesign, Kfull)
+        return assembly.assemble(self, terms, alg)
 
     def root_twists(self, terms: PoseTerms, alg) -> dict[str, np.ndarray | None]:
         """Elastic twist of every link root in link axes.
@@ -837,22 +749,7 @@ class FlexibleModel:
             ``{link: (b, 6, nx) array}``, or None for a link whose root does not move
             elastically; linear in the elastic coordinates ``x``.
         """
-        twist: dict[str, np.ndarray | None] = {self.plan.root: None}
-        for j in self.plan.joints:
-            tau = twist_at(alg, j.attach, twist[j.parent])
-            if tau is None:
-                twist[j.child] = None
-                continue
-            if j.kind == "prismatic":
-                # move to the child origin, offset R_o a d from the guide's mount point
-                tau = tau + alg.mm(offset_block(terms.slide[j.name]), tau)
-                R = alg.const(j.R_o)
-            elif j.kind == "revolute":
-                R = terms.rot[j.name]
-            else:
-                R = alg.const(j.R_o)
-            twist[j.child] = j.proj @ alg.mm(rotate_twist(np.swapaxes(R, -1, -2)), tau)
-        return twist
+        return assembly.root_twists(self, terms, alg)
 
     def matrices(self, Q, y=None, *, check_bounds: bool = True,
                  data: FlexibleData | None = None):

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex import beam
-from pinflex.erls.terms import BatchAlgebra, offset_block
+from pinflex.erls.terms import BatchAlgebra, joint_step
 from pinflex.exceptions import EigenSolverError
 from pinflex.linalg import rotate_twist, translate_twist
 
@@ -217,14 +217,8 @@ def root_twists(model, plan: SolvePlan, terms, b: int, alg=None) -> dict:
         if tau is None:
             twist[j.child] = None
             continue
-        if j.kind == "prismatic":
-            tau = tau + alg.mm(offset_block(terms.slide[j.name]), tau)
-            rotated = rotate_twist(j.R_o.T) @ tau
-        elif j.kind == "revolute":
-            rotated = alg.mm(rotate_twist(np.swapaxes(terms.rot[j.name], -1, -2)), tau)
-        else:
-            rotated = rotate_twist(j.R_o.T) @ tau
-        twist[j.child] = j.proj @ rotated
+        step = joint_step(j, terms.rot.get(j.name), terms.slide.get(j.name), alg)
+        twist[j.child] = step @ tau if step.ndim == 2 else alg.mm(step, tau)
     return twist
 
 
@@ -273,13 +267,9 @@ def factored_twists(model, plan: SolvePlan, terms, alg):
                 continue
             T_par, src = par
             T_in = att.lin @ T_par
-        if j.kind == "prismatic":
-            step = _lift(alg, np.eye(6)) + offset_block(terms.slide[j.name])
-            step = j.proj @ rotate_twist(j.R_o.T) @ step
-        elif j.kind == "revolute":
-            step = j.proj @ rotate_twist(np.swapaxes(terms.rot[j.name], -1, -2))
-        else:
-            step = _lift(alg, j.proj @ rotate_twist(j.R_o.T))
+        step = joint_step(j, terms.rot.get(j.name), terms.slide.get(j.name), alg)
+        if step.ndim == 2:
+            step = _lift(alg, step)
         twists[j.child] = (step if T_in is None else mm(step, T_in), src)
     return twists, sources
 

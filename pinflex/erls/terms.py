@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from pinflex.description import FlexibleLink
-from pinflex.linalg import skew
+from pinflex.linalg import rotate_twist, skew
 
 if TYPE_CHECKING:
     from pinflex.erls.design import DesignLayout
@@ -290,6 +290,59 @@ def offset_block(p: np.ndarray) -> np.ndarray:
     out = np.zeros(p.shape[:-1] + (6, 6))
     out[..., :3, 3:] = -skew(p)
     return out
+
+
+def joint_step(j: JointPlan, rot=None, slide=None, alg=None) -> np.ndarray:
+    """The unique-ERLS rule of one joint: ``child root twist = step @ attachment twist``.
+
+    The child's root copies the elastic twist of its attachment point on the parent (parent
+    axes), turned into the child axes, without the joint's own motion subspace (``j.proj``):
+
+    * revolute: ``proj Ad(Rᵀ)``, ``R = R_o Rot(axis, q)`` the child-in-parent rotation
+      (``rot``, pose-dependent);
+    * prismatic: ``proj Ad(R_oᵀ) (I + O(s))``, ``s`` the child origin's offset from the guide's
+      mount point (``slide``, pose-dependent), ``O`` its :func:`offset_block`;
+    * fixed: ``proj Ad(R_oᵀ)`` (constant).
+
+    Every route that propagates root twists (the nodal assembly, the solver-coordinate and
+    one-pose assemblies, the dynamics) applies this one rule.
+
+    Args:
+        j: The joint's plan.
+        rot: Its rotation R (lead, 3, 3) (revolute joints).
+        slide: Its offset s (lead, 3) [m] (prismatic joints).
+        alg: The algebra of the leading axis (None: plain arrays without one).
+
+    Returns:
+        ``step`` (lead, 6, 6), or (6, 6) for a fixed joint.
+    """
+    if j.kind == "revolute":
+        return j.proj @ rotate_twist(np.swapaxes(rot, -1, -2))
+    base = j.proj @ rotate_twist(j.R_o.T)
+    if j.kind == "prismatic":
+        lifted = base if alg is None else alg.const(base)
+        return lifted + base @ offset_block(slide)
+    return base
+
+
+def joint_step_rate(j: JointPlan, rot=None, rate=None) -> np.ndarray | None:
+    """Time derivative of :func:`joint_step` for joint rates ``rate`` (k,), (k, 6, 6).
+
+    Args:
+        j: The joint's plan.
+        rot: Its rotation R (3, 3) at the pose (revolute joints).
+        rate: Rates of the joint's (Pinocchio) coordinate, (k,) [rad/s or m/s].
+
+    Returns:
+        ``d step / dt`` per rate (k, 6, 6), or None for a fixed joint.
+    """
+    rate = np.asarray(rate, dtype=float)
+    if j.kind == "revolute":  # d(Rᵀ)/dq = -[a]× Rᵀ
+        return j.proj @ rotate_twist(-rate[:, None, None] * (skew(j.axis) @ rot.T))
+    if j.kind == "prismatic":
+        s = j.R_o @ j.axis
+        return (j.proj @ rotate_twist(j.R_o.T)) @ offset_block(rate[:, None] * s)
+    return None
 
 
 def zeros_like(jac: np.ndarray, nx: int) -> np.ndarray:
