@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from pinflex.erls import joints as joint_conditions
-from pinflex.erls.terms import Algebra, PoseTerms, joint_step, twist_at, zeros_like
+from pinflex.erls.terms import Algebra, PoseTerms, propagate_root_twists, twist_at, zeros_like
 from pinflex.linalg import translate_twist
 
 
@@ -64,12 +64,5 @@ def assemble(model, terms: PoseTerms, alg: Algebra):
 
 def root_twists(model, terms: PoseTerms, alg: Algebra) -> dict[str, np.ndarray | None]:
     """``{link: (b, 6, nx) or None}`` of :meth:`pinflex.erls.FlexibleModel.root_twists`."""
-    twist: dict[str, np.ndarray | None] = {model.plan.root: None}
-    for j in model.plan.joints:
-        tau = twist_at(alg, j.attach, twist[j.parent])
-        if tau is None:
-            twist[j.child] = None
-            continue
-        step = joint_step(j, terms.rot.get(j.name), terms.slide.get(j.name), alg)
-        twist[j.child] = step @ tau if step.ndim == 2 else alg.mm(step, tau)
-    return twist
+    return propagate_root_twists(model.plan, terms, alg,
+                                 lambda k, j, e: twist_at(alg, j.attach, e))

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex import beam
-from pinflex.erls.terms import BatchAlgebra, joint_step
+from pinflex.erls.terms import BatchAlgebra, joint_step, propagate_root_twists
 from pinflex.exceptions import EigenSolverError
 from pinflex.linalg import rotate_twist, translate_twist
 
@@ -211,15 +211,9 @@ def attach_twist(att: _Attach, root, alg, nx: int):
 def root_twists(model, plan: SolvePlan, terms, b: int, alg=None) -> dict:
     """Elastic twist of every link root (link axes) in solver coordinates, (b, 6, nx)."""
     alg = lead_algebra(alg, b)
-    twist = {model.plan.root: None}
-    for j, att in zip(model.plan.joints, plan.joint_attach):
-        tau = attach_twist(att, twist[j.parent], alg, plan.nx)
-        if tau is None:
-            twist[j.child] = None
-            continue
-        step = joint_step(j, terms.rot.get(j.name), terms.slide.get(j.name), alg)
-        twist[j.child] = step @ tau if step.ndim == 2 else alg.mm(step, tau)
-    return twist
+    return propagate_root_twists(
+        model.plan, terms, alg,
+        lambda k, j, e: attach_twist(plan.joint_attach[k], e, alg, plan.nx))
 
 
 def _lift(alg, C: np.ndarray) -> np.ndarray:

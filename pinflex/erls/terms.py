@@ -325,6 +325,31 @@ def joint_step(j: JointPlan, rot=None, slide=None, alg=None) -> np.ndarray:
     return base
 
 
+def propagate_root_twists(plan: ModelPlan, terms: PoseTerms, alg, attach) -> dict:
+    """Elastic root twist of every link, from the root down, by :func:`joint_step`.
+
+    Args:
+        plan: The model's plan (its root and joints, parents before children).
+        terms: Pose terms (or their jets) of the leading axis.
+        alg: The algebra of the leading axis.
+        attach: ``attach(k, joint, parent_twist)``: the elastic twist of joint ``k``'s
+            attachment point on its parent (parent axes) from the parent's root twist, or
+            None where both vanish (nodal or solver coordinates).
+
+    Returns:
+        ``{link: twist or None}`` (lead, 6, nx), None where a root does not move elastically.
+    """
+    twist: dict = {plan.root: None}
+    for k, j in enumerate(plan.joints):
+        tau = attach(k, j, twist[j.parent])
+        if tau is None:
+            twist[j.child] = None
+            continue
+        step = joint_step(j, terms.rot.get(j.name), terms.slide.get(j.name), alg)
+        twist[j.child] = step @ tau if step.ndim == 2 else alg.mm(step, tau)
+    return twist
+
+
 def joint_step_rate(j: JointPlan, rot=None, rate=None) -> np.ndarray | None:
     """Time derivative of :func:`joint_step` for joint rates ``rate`` (k,), (k, 6, 6).
 
