@@ -40,14 +40,10 @@ KNOWN_CYCLES: tuple[frozenset[str], ...] = (
     frozenset({"pinflex.description.checks", "pinflex.description.overlay",
                "pinflex.description.parse", "pinflex.description.schema",
                "pinflex.description.types"}),
-    frozenset({"pinflex.assignment.driver", "pinflex.assignment.study", "pinflex.batch.runner",
-               "pinflex.batch.sweep"}),
 )
 
 #: Imports against the layers, each with its reason: (module, imported module): why.
 KNOWN_UPWARD: dict[tuple[str, str], str] = {
-    ("pinflex.assignment.driver", "pinflex.batch.runner"):
-        "several expansion points run as batch tasks (cycle assignment <-> batch, to fix)",
     ("pinflex.assignment.study", "pinflex.cases.benchmark_a_path"):
         "a study file may name a shipped trajectory (builtin = 'benchmark_a')",
 }
