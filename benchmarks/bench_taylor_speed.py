@@ -119,7 +119,7 @@ def section_expansion(out, rounds, clock):
 
 def section_evaluation(out, a, Q, rounds, clock):
     """Section 2: evaluation at new poses against the exact model; the radius check."""
-    from pinflex.parametric import model as taylor
+    from pinflex.parametric import evaluation as taylor
 
     tm = expand(a, Q0, np.zeros(2), order=4, design=[])
     exact = a.frequencies(Q, np.zeros(2), n_modes=1)[:, 0]
