@@ -71,7 +71,7 @@ def _ur5_variants(folder: Path):
 
 
 def _bench_a():
-    from test_parameters import two_link
+    from arms import two_link
 
     import pinflex
     from pinflex.description import parse

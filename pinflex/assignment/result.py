@@ -74,7 +74,7 @@ class AssignmentResult:
         max_error_after_sorted: The same after.
         improved: Whether the tracked exact error went down (never True when it went up).
         events: Crossings, veering and ambiguous steps of the target modes along the
-            trajectory, before and after (:class:`pinflex.tracking.ModeEvent`).
+            trajectory, before and after (:class:`pinflex.erls.tracking.ModeEvent`).
         floors_model: Which model the floors were enforced on: ``""`` (no floors),
             ``"taylor"`` (the partially linear polynomial) or ``"taylor+exact"`` (its floor
             rows shifted by exact-minus-predicted offsets).
