@@ -73,7 +73,7 @@ def memory_limit_bytes() -> int:
     return 4 * 2**30
 
 
-def _gb(nbytes: float) -> str:
+def format_gb(nbytes: float) -> str:
     return f"{nbytes / 2**30:.3g} GiB"
 
 
@@ -89,7 +89,7 @@ def check_memory(nbytes: float, what: str, fix: str) -> None:
     limit = env if env is not None else memory_limit_bytes()
     if nbytes > limit:
         raise ResourceLimitExceeded(
-            f"{what} would need about {_gb(nbytes)} of memory, more than the {_gb(limit)} "
+            f"{what} would need about {format_gb(nbytes)} of memory, more than the {format_gb(limit)} "
             f"allowed (half the available memory, or PINFLEX_MAX_MEMORY_GB); {fix}"
         )
 

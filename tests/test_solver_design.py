@@ -180,7 +180,7 @@ def test_expansion_eigenpairs_solve_the_pencil(factor):
     full, space, keep, M, K, _, _ = reduced_solver_jets(model, QA, y, order=1)
     w, V = solver_design.expansion_eigenpairs(model, K[0], M[0])
     assert np.all(np.diff(w) >= 0) and w[0] == 0.0 and w[1] > 0
-    from pinflex.erls.solve import rounding_bound
+    from pinflex.erls.eigensolve import rounding_bound
 
     R = K[0] @ V[:, 1:] - M[0] @ V[:, 1:] * w[1:]
     rel = np.abs(R).max(axis=0) / (w[1:] * np.abs(M[0] @ V[:, 1:]).max(axis=0))

@@ -284,10 +284,10 @@ def _capped(run, cap: int, model, nd: int):
     except ConfigurationError as exc:
         if cap >= HIGHEST_CHOSEN_ORDER:
             raise
-        from pinflex.resources import _gb, taylor_estimate
+        from pinflex.resources import format_gb, taylor_estimate
 
         need = taylor_estimate(model.nv + nd, cap + 3, model.ndof, nd)[0]
         raise ConfigurationError(
             f"{exc}; orders above {cap} were not tried: judging order {cap + 1} needs an "
             f"expansion of order {cap + 3} in {model.nv + nd} variables on {model.ndof} dof, "
-            f"about {_gb(need)} of memory (more than allowed: PINFLEX_MAX_MEMORY_GB)") from None
+            f"about {format_gb(need)} of memory (more than allowed: PINFLEX_MAX_MEMORY_GB)") from None
