@@ -316,3 +316,19 @@ class PlausibilityWarning(PinflexWarning):
 
 class CostWarning(PinflexWarning):
     """A computation is allowed but estimated to be long or memory-hungry."""
+
+
+class LinkTooShort(ConfigurationError):
+    """A flexible link cannot be cut into the asked number of rigid segments (lumped models)."""
+
+
+class TooManyModes(ConfigurationError):
+    """More modes were asked of a lumped model than its hinges can carry."""
+
+
+class DampingNotRepresentable(ConfigurationError):
+    """The damping asked for has no joint-damping equivalent in an MJCF or URDF export."""
+
+
+class OutputExists(OutputError):
+    """An output file exists and overwriting it was not allowed (``--force``)."""

@@ -28,7 +28,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("native", "trajectory"),
     ("erls",),
     ("parametric", "prbdm"),
-    ("assignment", "dynamics"),
+    ("assignment", "dynamics", "lumped"),
     ("batch",),
     ("visualization", "cases"),
     ("cli", "__main__", "pinflex"),

@@ -12,10 +12,13 @@ from pinflex.cli.common import add_robot_arguments, parse_values
 def add_parser(sub) -> None:
     """Register the ``export`` subcommand on an ``argparse`` subparsers object."""
     p = sub.add_parser(
-        "export", help="M, K, damping and state-space (A, B, C, D) to .npz or .mat",
+        "export", help="M, K, damping and state-space (A, B, C, D) to .npz or .mat; or a "
+        "lumped model of the arm to MJCF (MuJoCo) or URDF",
         description="Linear model at a pose (--q) or at every sample of a trajectory "
         "(--trajectory). Coordinates p = [x; q]: elastic nodal coordinates then joints; "
-        "state [p; dp/dt]; inputs: joint torques; outputs: p. See docs/exports.md.",
+        "state [p; dp/dt]; inputs: joint torques; outputs: p. See docs/exports.md. "
+        "With --format mjcf or urdf: a lumped model (rigid segments and spring joints) fitted "
+        "to the arm's modes at the pose or along the trajectory; see docs/mujoco.md.",
     )
     add_robot_arguments(p)
     p.add_argument("--trajectory", metavar="CSV", help="export at every sample of a trajectory")
@@ -23,12 +26,23 @@ def add_parser(sub) -> None:
                    help="modal damping ratio of every elastic mode (default 0)")
     p.add_argument("--rayleigh", type=float, nargs=2, metavar=("ALPHA", "BETA"),
                    help="Rayleigh damping alpha M + beta K [1/s, s]")
-    p.add_argument("--out", required=True, help="output file, .npz or .mat")
+    p.add_argument("--out", required=True,
+                   help="output file: .npz or .mat (linear model), .xml (MJCF), .urdf")
+    p.add_argument("--format", choices=("linear", "mjcf", "urdf"),
+                   help="what to write (default: from the suffix of --out)")
+    from pinflex.cli import export_lumped
+
+    export_lumped.add_arguments(p)
     p.set_defaults(func=cmd_export)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
     """Run ``pinflex export``."""
+    from pinflex.cli import export_lumped
+
+    fmt = export_lumped.format_of(args)
+    if fmt in export_lumped.LUMPED_FORMATS:
+        return export_lumped.run(args, fmt)
     from pinflex.erls import FlexibleModel
     from pinflex.native.export import linear_model, save_linear_model
 
