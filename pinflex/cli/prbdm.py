@@ -8,6 +8,7 @@ arguments and returns the exit status (errors are reported by :func:`pinflex.cli
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -55,6 +56,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.add_argument("--html", default=None, metavar="FILE",
                         help="write an offline HTML preview of the fitted chain over its beam")
+    parser.add_argument("--export", default=None, metavar="FILE",
+                        help="write the fitted chain as MJCF (.xml, joint stiffness for MuJoCo) "
+                        "or URDF (.urdf plus .springs.json); see docs/mujoco.md")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing --export")
     parser.set_defaults(func=run)
     return parser
 
@@ -76,6 +81,10 @@ def run(args: argparse.Namespace) -> int:
     require_count(args.sections, "--sections", minimum=0, error=ConfigurationError)
     if args.html:
         check_file_target(args.html, "--html")
+    if args.export:
+        from pinflex.lumped.chain import export_targets
+
+        export_targets(args.export, args.force)
     beam = (uniform_beam() if args.beam == "uniform"
             else random_beam(args.seed, n_sections=args.sections))
     choice = None
@@ -111,6 +120,12 @@ def run(args: argparse.Namespace) -> int:
         from pinflex.visualization import prbdm_preview_html
 
         html = str(prbdm_preview_html(beam, fit, args.html))
+    if args.export:
+        from pinflex.lumped.chain import export_chain
+
+        written = export_chain(fit.chain(beam), args.export, planform=beam, force=args.force)
+        print(f"wrote {', '.join(str(p) for p in written)}", file=sys.stderr if args.json
+              else sys.stdout)
     if args.json:
         if html is None and fidelity is None:
             print(fit.to_json())
