@@ -1,0 +1,249 @@
+"""Fidelity of lumped models against the segment count, beside MuJoCo's own rod, in one run.
+
+Two cases, every number measured in this process:
+
+* **link**: benchmark A's first link (L = 0.6 m, EI = 69e9 x 3.97e-8 N m^2, rhoA = 1.9 kg/m)
+  clamped at its root, against the closed-form cantilever (Euler-Bernoulli roots). For each
+  segment count n: pinflex's fitted lumped link (modes 1-2 matched, with its ERLS model at 40
+  elements), the equal-segment chain with k = EI/l, and MuJoCo's own 1-D flex (a discrete
+  elastic rod, ``<flexcomp dim="1">``) of n edges with the same E, I (``young`` scaled so that
+  the rod's circle of radius 15 mm has I = 3.97e-8 m^4) and rhoA (``mass`` = rhoA L, which
+  MuJoCo spreads equally over the n + 1 points; the two points of the clamped first edge are
+  pinned). The rod's frequencies are read off 0.4 s of its free vibration after a tip kick
+  (least-squares sinusoids started at the spectrum's peak; RK4, 2e-5 s, stiff edge equality
+  constraints); the lumped models' from MuJoCo's own mass matrix and joint stiffness of the
+  exported MJCF. Only the rod's mode 1 is read (its mode 2 is barely excited by the kick).
+* **arm**: benchmark A straight with free joints against its ERLS model (= the global FE of
+  the same mesh): fitted and naive lumped arms, modes 1-2, own joints.
+
+MuJoCo step time: this thread's CPU time per ``mj_step`` (``time.thread_time``; MuJoCo steps
+in the calling thread, so other processes on a loaded machine do not inflate it) of each model
+(lumped MJCF with its hinges; the rod), same integrator (RK4) and step (2e-5 s), median and
+range over interleaved rounds. The machine's load is printed.
+
+Run: ``python benchmarks/bench_lumped.py [--quick] [--out docs/lumped_fidelity.png]
+[--json FILE] [--csv FILE]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from interleave import blas_threads, interleaved, pin_single_thread  # noqa: E402
+
+pin_single_thread()
+
+import numpy as np  # noqa: E402
+import scipy.linalg as sla  # noqa: E402
+from lumped_ring import ring_frequencies  # noqa: E402
+from reference_fe import cantilever_hz  # noqa: E402
+
+from pinflex.description import parse  # noqa: E402
+from pinflex.erls import FlexibleModel  # noqa: E402
+from pinflex.lumped import fit_lumped, lumped_mjcf  # noqa: E402
+
+E, I2, RHOA, L, R = 69e9, 3.97e-8, 1.9, 0.6, 0.015
+DT = 2e-5
+
+LINK_URDF = f"""<robot name="link1" xmlns:pinflex="urn:pinflex:urdf:1">
+  <link name="base"/><link name="link1"/>
+  <joint name="q1" type="revolute"><parent link="base"/><child link="link1"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <pinflex:joint name="q1" locked="true"/>
+  <pinflex:flexible link="link1" elements="40" tip="{L} 0 0" normal="0 0 1">
+    <pinflex:material E="{E}" linear_density="{RHOA}"/>
+    <pinflex:section A="7.07e-4" Iy="{I2}" Iz="{I2}" J="{2 * I2}"/>
+  </pinflex:flexible>
+</robot>"""
+
+
+def mujoco_frequencies(mujoco, m, d):
+    """Non-rigid frequencies [Hz] from mj_fullM and jnt_stiffness (free joints condensed)."""
+    mujoco.mj_forward(m, d)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    k = np.array(m.jnt_stiffness[m.dof_jntid])
+    e, r = k > 0, k == 0
+    Mc = M[np.ix_(e, e)]
+    if r.any():
+        Mc = Mc - M[np.ix_(e, r)] @ np.linalg.solve(M[np.ix_(r, r)], M[np.ix_(r, e)])
+    return np.sqrt(sla.eigh(np.diag(k[e]), Mc, eigvals_only=True)) / (2 * np.pi)
+
+
+def rod_xml(n: int) -> str:
+    """MuJoCo's 1-D flex rod of n edges, first edge clamped."""
+    young = E * I2 / (np.pi * R**4 / 4)
+    return f"""<mujoco><option gravity="0 0 0" timestep="{DT}" integrator="RK4"/>
+<worldbody>
+ <flexcomp name="rod" type="grid" count="{n + 1} 1 1" spacing="{L / n} 1 1" dim="1"
+           radius="{R}" mass="{RHOA * L}">
+   <elasticity young="{young}" poisson="0.3"/>
+   <edge equality="true" solref="{2 * DT} 1"/>
+   <pin id="0 1"/>
+ </flexcomp>
+</worldbody></mujoco>"""
+
+
+def rod_frequencies(mujoco, n: int, guess, duration: float) -> np.ndarray:
+    """Modes 1-2 of the rod from its free vibration after a tip velocity kick [Hz]."""
+    m = mujoco.MjModel.from_xml_string(rod_xml(n))
+    d = mujoco.MjData(m)
+    zj = [j for j in range(m.njnt) if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE
+          and abs(m.jnt_axis[j][2]) > 0.5]
+    tip = zj[int(np.argmax([m.body_pos[m.jnt_bodyid[j]][0] for j in zj]))]
+    d.qvel[m.jnt_dofadr[tip]] = 1e-3
+    t, y = [], []
+    while d.time < duration:
+        mujoco.mj_step(m, d)
+        t.append(d.time)
+        y.append(d.qpos[m.jnt_qposadr[tip]])
+    t, y = np.array(t), np.array(y)
+    # start mode 1 at the spectrum's peak below 1.5 x the guess (the rod can be far off)
+    spec = np.abs(np.fft.rfft((y - y.mean()) * np.hanning(y.size)))
+    freq = np.fft.rfftfreq(y.size, t[1] - t[0])
+    low = freq < 1.5 * guess[0]
+    start = [float(freq[low][np.argmax(spec[low])]), float(guess[1])]
+    # mode 2 is fitted only to keep it out of mode 1's reading: a tip kick excites it too
+    # little (and a rod of two edges has no second transverse mode) to read it reliably
+    return np.array([ring_frequencies(t, y, start)[0], np.nan])
+
+
+def stepper(mujoco, m):
+    """A function stepping ``m`` 200 times from its current state."""
+    d = mujoco.MjData(m)
+
+    def run():
+        for _ in range(200):
+            mujoco.mj_step(m, d)
+    return run
+
+
+def main(argv=None) -> int:
+    """Run the study; print, and write what is asked."""
+    import mujoco
+
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--quick", action="store_true", help="fewer segment counts and rounds")
+    p.add_argument("--out", default=None, help="chart (PNG); none unless given")
+    p.add_argument("--json", default=None, help="write the results as JSON")
+    p.add_argument("--csv", default=None, help="write the results as CSV")
+    args = p.parse_args(argv)
+    counts = [2, 3, 4, 6] if args.quick else [2, 3, 4, 5, 6, 8, 10, 12]
+    rounds = 3 if args.quick else 7
+    load = os.getloadavg()
+    print(f"BLAS threads: {blas_threads()}; load average before: "
+          f"{load[0]:.1f} {load[1]:.1f} {load[2]:.1f}; mujoco {mujoco.__version__}")
+    exact = cantilever_hz(L, E * I2, RHOA, 2)
+    link = FlexibleModel(parse(LINK_URDF), planar=True)
+    arm = FlexibleModel(Path(__file__).resolve().parents[1] / "urdf" / "two_link.urdf",
+                        planar=True, joints="free")
+    erls_arm = arm.frequencies([0.0, 0.0])[:2]
+    rows = []
+    for n in counts:
+        c0 = time.process_time()
+        fit = fit_lumped(link, n, n_modes=min(2, n - 1))
+        fit_cpu = time.process_time() - c0
+        m_fit = mujoco.MjModel.from_xml_string(
+            lumped_mjcf(fit.lumped, [0.0], gravity=(0, 0, 0), timestep=DT).text)
+        m_fit.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+        f_fit = mujoco_frequencies(mujoco, m_fit, mujoco.MjData(m_fit))[:2]
+        f_naive = fit.naive.frequencies([0.0], "own")[:2]
+        f_rod = rod_frequencies(mujoco, n, exact, 0.4)
+        m_rod = mujoco.MjModel.from_xml_string(rod_xml(n))
+        times = interleaved({"lumped": stepper(mujoco, m_fit), "rod": stepper(mujoco, m_rod)},
+                            rounds=rounds, clock=time.thread_time)
+        fit_arm = fit_lumped(arm, n, poses=[0.0, 0.0])
+        f_arm = fit_arm.lumped.frequencies([0.0, 0.0])[:2]
+        f_arm_naive = fit_arm.naive.frequencies([0.0, 0.0])[:2]
+
+        def err(f, ref):
+            out = np.full(2, np.nan)
+            out[:f.size] = np.abs(f / ref[:f.size] - 1.0)
+            return out
+
+        row = {"n": n, "link_fit_error": err(f_fit, exact).tolist(),
+               "link_naive_error": err(f_naive, exact).tolist(),
+               "link_rod_error": err(f_rod, exact).tolist(),
+               "link_fit_cpu_s": fit_cpu,
+               "step_lumped_s": float(np.median(times["lumped"])) / 200,
+               "step_lumped_range_s": [float(times["lumped"].min()) / 200,
+                                       float(times["lumped"].max()) / 200],
+               "step_rod_s": float(np.median(times["rod"])) / 200,
+               "step_rod_range_s": [float(times["rod"].min()) / 200,
+                                    float(times["rod"].max()) / 200],
+               "lumped_nv": int(m_fit.nv), "rod_nv": int(m_rod.nv),
+               "arm_fit_error": err(f_arm, erls_arm).tolist(),
+               "arm_naive_error": err(f_arm_naive, erls_arm).tolist()}
+        rows.append(row)
+        print(f"n={n:2d}  link mode1/2: fitted {row['link_fit_error'][0]:.2e}/"
+              f"{row['link_fit_error'][1]:.2e}  naive {row['link_naive_error'][0]:.2e}/"
+              f"{row['link_naive_error'][1]:.2e}  MuJoCo rod {row['link_rod_error'][0]:.2e}/"
+              f"{row['link_rod_error'][1]:.2e}  | step lumped {1e6 * row['step_lumped_s']:.1f} us"
+              f" (nv {row['lumped_nv']}), rod {1e6 * row['step_rod_s']:.1f} us (nv "
+              f"{row['rod_nv']})  | arm fitted {row['arm_fit_error'][0]:.1e}/"
+              f"{row['arm_fit_error'][1]:.1e} naive {row['arm_naive_error'][0]:.1e}/"
+              f"{row['arm_naive_error'][1]:.1e}", flush=True)
+    load = os.getloadavg()
+    print(f"load average after: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}")
+    result = {"exact_link_hz": exact.tolist(), "erls_arm_hz": erls_arm.tolist(),
+              "timestep_s": DT, "integrator": "RK4", "rows": rows,
+              "blas_threads": blas_threads()}
+    if args.json:
+        Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
+    if args.csv:
+        with open(args.csv, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["n", "link_fit_mode1", "link_fit_mode2", "link_naive_mode1",
+                        "link_naive_mode2", "link_rod_mode1", "link_rod_mode2",
+                        "step_lumped_us", "step_rod_us", "arm_fit_mode1", "arm_fit_mode2",
+                        "arm_naive_mode1", "arm_naive_mode2"])
+            for r in rows:
+                w.writerow([r["n"], *r["link_fit_error"], *r["link_naive_error"],
+                            *r["link_rod_error"], 1e6 * r["step_lumped_s"],
+                            1e6 * r["step_rod_s"], *r["arm_fit_error"], *r["arm_naive_error"]])
+    if args.out:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from pinflex.outputs import save_figure
+
+        ns = [r["n"] for r in rows]
+        fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+        for key, label, style in (("link_fit_error", "pinflex fitted", "o-"),
+                                  ("link_naive_error", "equal segments, k = EI/l", "s--"),
+                                  ("link_rod_error", "MuJoCo 1-D flex rod", "^-")):
+            for mode, alpha in ((0, 1.0), (1, 0.45)):
+                if key == "link_rod_error" and mode == 1:
+                    continue
+                a1.semilogy(ns, [max(r[key][mode], 1e-12) for r in rows], style,
+                            alpha=alpha, label=f"{label}, mode {mode + 1}")
+        a1.set_xlabel("segments (edges) n")
+        a1.set_ylabel("relative frequency error vs closed form")
+        a1.set_title("clamped link (benchmark A link 1)")
+        a1.legend(fontsize=7)
+        a1.grid(True, which="both", alpha=0.3)
+        a2.plot(ns, [1e6 * r["step_lumped_s"] for r in rows], "o-", label="lumped MJCF")
+        a2.plot(ns, [1e6 * r["step_rod_s"] for r in rows], "^-", label="MuJoCo flex rod")
+        a2.set_xlabel("segments (edges) n")
+        a2.set_ylabel(f"CPU time per mj_step [us] (RK4, {DT:g} s)")
+        a2.set_title("MuJoCo step time")
+        a2.legend()
+        a2.grid(True, alpha=0.3)
+        fig.tight_layout()
+        save_figure(fig, args.out, dpi=120)
+        print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
