@@ -393,8 +393,8 @@ def section_fitspeed_study(quick: bool, links: tuple[int, ...] = STUDY_LINKS,
 
 def section_paper(seed: int, starts: int, quick: bool) -> None:
     """Every loss by the paper's definitions beside pinflex's own, and the paper's numbers."""
+    from pinflex.cases.paper001 import PUBLISHED_LOSS_PERCENT as PAPER_PUBLISHED
     from pinflex.prbdm.paper import (
-        PAPER_PUBLISHED,
         eq14_reference,
         paper_losses,
         paper_problem,

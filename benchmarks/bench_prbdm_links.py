@@ -34,8 +34,8 @@ from pinflex.prbdm.beams import random_beam, uniform_beam  # noqa: E402
 from pinflex.prbdm.chain import chain_frequencies, solve_tip_statics  # noqa: E402
 from pinflex.prbdm.fidelity import links_for_tolerance  # noqa: E402
 from pinflex.prbdm.mapping import fit_prbdm  # noqa: E402
+from pinflex.prbdm.planar import planar_statics  # noqa: E402
 from pinflex.prbdm.problem import compute_truth  # noqa: E402
-from pinflex.prbdm.sensitivity import planar_statics  # noqa: E402
 
 TOLERANCES = (1e-2, 3e-3, 1e-3, 5e-4)
 

@@ -7,17 +7,16 @@ import pytest
 
 from pinflex.prbdm.beams import random_beam
 from pinflex.prbdm.chain import build_chain, mass_matrix, solve_tip_statics
-from pinflex.prbdm.problem import build_problem, compute_truth, evaluate, reference_stiffness
-from pinflex.prbdm.sensitivity import (
+from pinflex.prbdm.massmatrix import (
     ChainWorkspace,
-    WarmStarts,
-    evaluate_with_jacobian,
     link_moments,
     mass_structure,
-    planar_statics,
     pose_mass_matrix,
-    residuals_and_jacobian,
 )
+from pinflex.prbdm.planar import planar_statics
+from pinflex.prbdm.problem import build_problem, compute_truth, evaluate, reference_stiffness
+from pinflex.prbdm.sensitivity import evaluate_with_jacobian, residuals_and_jacobian
+from pinflex.prbdm.warmstarts import WarmStarts
 
 
 @pytest.fixture(scope="module")

@@ -345,10 +345,10 @@ def _partial_integrals(planform: Planform, s_m: np.ndarray) -> np.ndarray:
     exactly (3-point Gauss for the polynomials, the logarithmic mean for 1/I). The width is
     linear on the piece, so it is evaluated from the piece's end values directly.
     """
-    return _partial_integrals_and_widths(planform, s_m)[0]
+    return partial_integrals_and_widths(planform, s_m)[0]
 
 
-def _partial_integrals_and_widths(planform: Planform,
+def partial_integrals_and_widths(planform: Planform,
                                   s_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_partial_integrals` and the full widths w(s) [m] found on the way."""
     x = planform.x_m

@@ -32,6 +32,7 @@ from ..exceptions import InvalidChain, MappingFailed
 from ..progress import ProgressBar
 from .beams import Planform
 from .chain import PrbdmChain, build_chain
+from .massmatrix import ChainWorkspace
 from .options import OBJECTIVES
 from .problem import (
     MIN_FRACTION,
@@ -40,15 +41,12 @@ from .problem import (
     TruthData,
     build_problem,
     decode,
+    design_bounds,
     evaluate,
     static_stiffness,
 )
-from .sensitivity import (
-    ChainWorkspace,
-    WarmStarts,
-    evaluate_with_jacobian,
-    residuals_and_jacobian,
-)
+from .sensitivity import evaluate_with_jacobian, residuals_and_jacobian
+from .warmstarts import WarmStarts
 
 JACOBIANS = ("analytic", "finite-difference")
 
@@ -269,14 +267,6 @@ class Objective:
         return full
 
 
-def _bounds(problem: MappingProblem) -> tuple[np.ndarray, np.ndarray]:
-    n1 = problem.n_joints + 1
-    lower = np.concatenate([np.full(n1, MIN_FRACTION), np.full(problem.n_stiffness_params, -25.0)])
-    upper = np.concatenate([np.full(n1, 1.0 - MIN_FRACTION),
-                            np.full(problem.n_stiffness_params, 25.0)])
-    return lower, upper
-
-
 def start_points(problem: MappingProblem, n_starts: int, seed: int) -> np.ndarray:
     """Multistart designs (eq. 23), shape (n_starts, n_params)."""
     rng = np.random.default_rng(seed)
@@ -313,7 +303,7 @@ def _local(problem: MappingProblem, kind: str, x0: np.ndarray, weight: float | N
     ``counter[0]`` (when given) is increased by the residual evaluations spent, including
     those of finite differences.
     """
-    lower, upper = _bounds(problem)
+    lower, upper = design_bounds(problem)
     x0 = np.clip(x0, lower + 1e-12, upper - 1e-12)
     # A perfect frequency fit is reachable, so eigen-only runs to round-off; with deflection the
     # optimum has a non-zero residual and a relative cost change of 1e-9 is plenty.

@@ -37,8 +37,16 @@ from scipy.optimize import minimize
 
 from ..exceptions import InvalidChain
 from .beams import Planform
-from .problem import MappingProblem, TruthData, build_problem, evaluate, paper_poses
-from .sensitivity import ChainWorkspace, evaluate_with_jacobian
+from .massmatrix import ChainWorkspace
+from .problem import (
+    MappingProblem,
+    TruthData,
+    build_problem,
+    design_bounds,
+    evaluate,
+    paper_poses,
+)
+from .sensitivity import evaluate_with_jacobian
 
 #: Pose offset xi of eq. (11) [rad].
 PAPER_XI = 0.05
@@ -46,12 +54,6 @@ PAPER_XI = 0.05
 PAPER_EPS_SINGLE = 0.1
 #: Pose step epsilon of eq. (11) for the Pareto search [rad].
 PAPER_EPS_PARETO = 0.01
-#: Published losses [%] of paper 001 (Tables 3-5, random beam 17,572), for reference only.
-PAPER_PUBLISHED = {
-    "eigen": {4: 0.0327, 5: 0.0283},
-    "eigen_3_modes": {4: 0.0151, 5: 0.0101},
-    "combined": {3: 59.8087, 4: 12.9613, 5: 10.1844},
-}
 
 
 def eq14_reference(planform: Planform, link_lengths_m: np.ndarray) -> np.ndarray:
@@ -123,8 +125,6 @@ def polish_eq15a(problem: MappingProblem, x0: np.ndarray, max_iter: int = 200) -
     The least-squares fits minimise the mean of the squares; the literal sum of norms has a
     slightly different minimiser. Bounds are eq. (15c-d) and the simplex is an equality.
     """
-    from .mapping import _bounds
-
     if problem.metrics != "paper":
         raise InvalidChain("polish_eq15a needs a problem built with metrics='paper'")
     workspace = ChainWorkspace(problem.planform, problem.n_joints)
@@ -141,7 +141,7 @@ def polish_eq15a(problem: MappingProblem, x0: np.ndarray, max_iter: int = 200) -
         grad = np.einsum("mk,mkp->p", blocks / safe[:, None], jac)
         return float(norms.sum()), grad
 
-    lower, upper = _bounds(problem)
+    lower, upper = design_bounds(problem)
     cons = {"type": "eq", "fun": lambda x: np.sum(x[:n1]) - 1.0,
             "jac": lambda x: np.concatenate([np.ones(n1), np.zeros(x.size - n1)])}
     x_start = np.array(x0, dtype=float)

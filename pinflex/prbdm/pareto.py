@@ -17,8 +17,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
-from .problem import Evaluation, MappingProblem
-from .sensitivity import ChainWorkspace, WarmStarts, evaluate_with_jacobian
+from .massmatrix import ChainWorkspace
+from .problem import Evaluation, MappingProblem, design_bounds
+from .sensitivity import evaluate_with_jacobian
+from .warmstarts import WarmStarts
 
 
 def hypervolume_2d(points: np.ndarray, reference: tuple[float, float]) -> float:
@@ -62,13 +64,11 @@ def epsilon_constraint_front(problem: MappingProblem, starts: list[np.ndarray],
     Returns:
         (design, evaluation) per bound that SLSQP solved feasibly.
     """
-    from .mapping import _bounds
-
     workspace = ChainWorkspace(problem.planform, problem.n_joints)
     warm = WarmStarts()
     n1 = problem.n_joints + 1
     n_eig = problem.poses.shape[0] * problem.n_modes
-    lower, upper = _bounds(problem)
+    lower, upper = design_bounds(problem)
     cache: dict = {}
 
     def parts(x):

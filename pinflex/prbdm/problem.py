@@ -184,6 +184,18 @@ def build_problem(planform: Planform, n_joints: int, n_modes: int | None = None,
                           metrics)
 
 
+def design_bounds(problem: MappingProblem) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds of the design vector.
+
+    Eq. (15c-d) on the fractions, and +-25 on the log correction factors.
+    """
+    n1 = problem.n_joints + 1
+    n_k = problem.n_stiffness_params
+    lower = np.concatenate([np.full(n1, MIN_FRACTION), np.full(n_k, -25.0)])
+    upper = np.concatenate([np.full(n1, 1.0 - MIN_FRACTION), np.full(n_k, 25.0)])
+    return lower, upper
+
+
 def joint_pieces(planform: Planform, gamma: np.ndarray) -> np.ndarray:
     """Boundaries of the beam pieces the joints stand for, shape (n + 1,) [m]."""
     lengths = np.asarray(gamma) * planform.length_m
