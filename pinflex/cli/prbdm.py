@@ -12,7 +12,7 @@ import sys
 
 import numpy as np
 
-from pinflex.prbdm.options import OBJECTIVES, STIFFNESS_LAWS
+from pinflex.prbdm.options import DEFINITIONS, OBJECTIVES, STIFFNESS_LAWS
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -46,7 +46,29 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              "'paper' (eq. 14, one factor per pose)")
     parser.add_argument("--poses", choices=("straight", "paper"), default="straight",
                         help="poses where frequencies are compared")
-    parser.add_argument("--starts", type=int, default=8, help="multistart points per search")
+    parser.add_argument("--definitions", choices=DEFINITIONS, default="pinflex",
+                        help="what the fit minimises and reports: pinflex's own losses "
+                             "(default), 'paper-text' (paper 001 as printed: eq. 14 with the "
+                             "area moment, eq. 15a summed over the poses xi = 0.05 + i eps, eps "
+                             "0.1) or 'paper-code' (what the paper's code computes: eigenvalues "
+                             "of M^-1 K against omega^2, mean over the poses 0.1:0.01:pi/(2n), "
+                             "eq. 14 with the links' rotational inertia, its tip-position "
+                             "deflection case); the paper's definitions fit one factor per "
+                             "pose by a global search and print their own losses beside "
+                             "pinflex's")
+    parser.add_argument("--epsilon", type=float, default=None,
+                        help="pose step [rad] of the paper's definitions (text 0.1, code 0.01)")
+    parser.add_argument("--code-force", type=float, default=None, metavar="NEWTON",
+                        help="tip force of the code's deflection case [N] (default: the force "
+                             "that deflects the tip by 0.1437 L, as the code's 1 MN did on "
+                             "its beam)")
+    parser.add_argument("--samples", type=int, default=None,
+                        help="global sample size of the paper's definitions' search (default "
+                             "65536 eigen-only, 1024 with deflection)")
+    parser.add_argument("--starts", type=int, default=None,
+                        help="multistart points per search (default 8); with --definitions "
+                             "paper-*, the polished starts of the global search (default 48 "
+                             "eigen-only, 8 with deflection)")
     parser.add_argument("--tol", type=float, default=None, metavar="TOL",
                         help="pick the fewest joints (from --modes, default 1, up to --links) "
                              "whose estimated combined error against the converged beam truth "
@@ -74,7 +96,27 @@ def run(args: argparse.Namespace) -> int:
     from pinflex.validation import require_count
 
     require_count(args.seed, "--seed", minimum=0, error=ConfigurationError)
-    require_count(args.starts, "--starts", minimum=1, error=ConfigurationError)
+    paper = args.definitions != "pinflex"
+    if args.starts is None and not paper:
+        args.starts = 8
+    if args.starts is not None:
+        require_count(args.starts, "--starts", minimum=1, error=ConfigurationError)
+    if args.samples is not None:
+        require_count(args.samples, "--samples", minimum=1, error=ConfigurationError)
+    if paper and (args.stiffness_law != "segment" or args.poses != "straight"
+                  or args.tol is not None):
+        raise ConfigurationError(f"--definitions {args.definitions} sets the spring law and the "
+                                 "poses; drop --stiffness-law/--poses/--tol")
+    if not paper and (args.epsilon is not None or args.code_force is not None
+                      or args.samples is not None):
+        raise ConfigurationError("--epsilon, --code-force and --samples belong to "
+                                 "--definitions paper-text/paper-code")
+    if args.epsilon is not None and not (np.isfinite(args.epsilon) and args.epsilon > 0):
+        raise ConfigurationError(f"--epsilon {args.epsilon!r} must be a positive angle [rad]")
+    if args.code_force is not None and not (np.isfinite(args.code_force)
+                                            and args.code_force != 0):
+        raise ConfigurationError(f"--code-force {args.code_force!r} must be a non-zero force "
+                                 "[N]")
     require_count(args.links, "--links", minimum=1, error=ConfigurationError)
     if args.modes is not None:
         require_count(args.modes, "--modes", minimum=1, error=ConfigurationError)
@@ -108,7 +150,9 @@ def run(args: argparse.Namespace) -> int:
         fit = fit_prbdm(beam, args.links, n_modes, objective=args.objective,
                         stiffness_law=args.stiffness_law, poses=args.poses,
                         n_starts=args.starts, seed=args.seed, truth=truth,
-                        progress=not args.no_progress)
+                        progress=not args.no_progress, definitions=args.definitions,
+                        epsilon=args.epsilon, code_force_n=args.code_force,
+                        n_samples=args.samples)
     fidelity = None if choice is None else {
         "tol": args.tol, "n_joints": choice.n_joints, "estimate": choice.estimate,
         "estimator": "combined loss of the fit against the converged beam truth",
@@ -151,6 +195,9 @@ def run(args: argparse.Namespace) -> int:
               + ", ".join(f"{n}R {e:.2e}" for n, e, _, _ in choice.levels))
     print(f"  {fit.determinacy}: {fit.n_free_parameters} free parameters, "
           f"{fit.n_matched} matched quantities")
+    if paper:
+        _print_paper(fit)
+        return 0
     if fit.exactly_determined:
         print(f"  residual (not a loss) {fit.eigen_error:.3e}; frequencies can be matched "
               "exactly along a manifold of designs, so this says nothing of model quality")
@@ -168,3 +215,23 @@ def run(args: argparse.Namespace) -> int:
     if html:
         print(f"  wrote {html}")
     return 0
+
+
+def _print_paper(fit) -> None:
+    """The losses of a fit made by the paper's definitions, beside pinflex's of its chain."""
+    pct = {k: 100.0 * v for k, v in fit.losses.items()}
+    print(f"  losses by {fit.definitions} over its {fit.n_poses} poses, in %: "
+          + ", ".join(f"{k} {v:.4g}" for k, v in pct.items()))
+    print("  per mode, the largest |f/f_truth - 1| over those poses, in %: "
+          + ", ".join(f"{100.0 * v:.3g}" for v in fit.mode_errors)
+          + "  (the loss can be small while a mode is far off)")
+    best = fit.start_values[0] if fit.start_values else float("nan")
+    near = sum(v <= best * 1.001 for v in fit.start_values)
+    print(f"  global search: {fit.n_samples} samples, {len(fit.start_values)} polished starts, "
+          f"{near} within 0.1 % of the best")
+    if fit.load_n:
+        print("  deflection case: tip force " + ", ".join(f"({f[0]:g}, {f[1]:.6g}) N"
+                                                       for f in fit.load_n))
+    print("  the same chain (mean factor, eq. 25) by pinflex's definitions at the straight "
+          f"pose: eigen {fit.eigen_error:.3e}  deflection {fit.deflection_error:.3e}  "
+          f"combined {fit.combined_error:.3e}")

@@ -13,7 +13,7 @@ from pinflex.lazy import lazy_exports
 _EXPORTS = {
     "Planform": ".beams",
     "PrbdmChain": ".chain",
-    "PrbdmFit": ".mapping",
+    "PrbdmFit": ".fit",
     "beam_frequencies": ".truth",
     "build_chain": ".chain",
     "chain_frequencies": ".chain",
@@ -47,6 +47,7 @@ __all__ = [
 if TYPE_CHECKING:
     from .beams import Planform, random_beam, uniform_beam
     from .chain import PrbdmChain, build_chain, chain_frequencies, solve_tip_statics, to_urdf
-    from .mapping import PrbdmFit, fit_prbdm
+    from .fit import PrbdmFit
+    from .mapping import fit_prbdm
     from .problem import compute_truth
     from .truth import beam_frequencies, elastica_tip

@@ -429,12 +429,14 @@ def chain_segments(planform: Planform, bounds_m: np.ndarray) -> list[SegmentProp
 def segment_arrays(planform: Planform, bounds_m: np.ndarray) -> tuple[np.ndarray, ...]:
     """Array form of :func:`chain_segments` for trusted, increasing bounds (no checks).
 
+    ``bounds_m`` may carry leading dimensions (several designs at once, shape (..., k + 1)).
+
     Returns:
-        (mass, com, ixx, iyy, izz, mean_area_moment, compliance), each shape (k,).
+        (mass, com, ixx, iyy, izz, mean_area_moment, compliance), each shape (..., k).
     """
     bounds = np.asarray(bounds_m, dtype=float)
-    cumulative = _partial_integrals(planform, bounds)
-    m0, m1, m2, w3, inv_i = (cumulative[1:] - cumulative[:-1]).T
+    cumulative = _partial_integrals(planform, bounds.ravel()).reshape(bounds.shape + (5,))
+    m0, m1, m2, w3, inv_i = np.moveaxis(cumulative[..., 1:, :] - cumulative[..., :-1, :], -1, 0)
     t = planform.thickness_m
     rho_t = planform.material.density_kg_m3 * t
     mass = rho_t * m0
@@ -443,7 +445,7 @@ def segment_arrays(planform: Planform, bounds_m: np.ndarray) -> tuple[np.ndarray
     ixx = rho_t * (w3 + t**2 * m0) / 12.0
     iyy = bending + mass * t**2 / 12.0
     izz = bending + rho_t * w3 / 12.0
-    mean_i = m0 * t**3 / 12.0 / (bounds[1:] - bounds[:-1])
+    mean_i = m0 * t**3 / 12.0 / np.diff(bounds, axis=-1)
     comp = inv_i / planform.material.youngs_modulus_pa
     return mass, com, ixx, iyy, izz, mean_i, comp
 

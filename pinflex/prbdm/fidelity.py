@@ -23,7 +23,8 @@ import numpy as np
 
 from ..exceptions import ConfigurationError
 from .beams import Planform
-from .mapping import PrbdmFit, fit_prbdm
+from .fit import PrbdmFit
+from .mapping import fit_prbdm
 from .problem import TruthData, compute_truth
 
 

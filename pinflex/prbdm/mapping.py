@@ -21,9 +21,7 @@ simplex equality (15b) is a residual on the fractions' sum, to which the losses 
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -31,151 +29,24 @@ from scipy.optimize import least_squares
 from ..exceptions import InvalidChain, MappingFailed
 from ..progress import ProgressBar
 from .beams import Planform
-from .chain import PrbdmChain, build_chain
+from .fit import PrbdmFit, make_fit
 from .massmatrix import ChainWorkspace
-from .options import OBJECTIVES
+from .options import DEFINITIONS, OBJECTIVES
+from .paper import PAPER_EPS_SINGLE, PAPER_TEXT, paper_losses
+from .paperfit import fit_by_definitions
 from .problem import (
     MIN_FRACTION,
     Evaluation,
     MappingProblem,
     TruthData,
     build_problem,
-    decode,
     design_bounds,
     evaluate,
-    static_stiffness,
 )
 from .sensitivity import evaluate_with_jacobian, residuals_and_jacobian
 from .warmstarts import WarmStarts
 
 JACOBIANS = ("analytic", "finite-difference")
-
-
-@dataclass(frozen=True)
-class PrbdmFit:
-    r"""Result of a PRBDM mapping.
-
-    Attributes:
-        beam: Beam label.
-        n_joints: Number of revolute joints n.
-        n_modes: Number of matched modes.
-        objective: Objective that was minimised.
-        stiffness_law: ``"segment"`` or ``"paper"``.
-        link_fractions: Link-length fractions :math:`\gamma` of links 0..n, (n + 1,) [-].
-        link_lengths_m: Link lengths, (n + 1,) [m].
-        stiffness: Static spring stiffness of joints 1..n, (n,) [N m/rad].
-        correction_factors: Stiffness correction factors (per joint or per pose) [-].
-        truth_hz: Beam frequencies, (n_modes,) [Hz].
-        model_hz: Chain frequencies at the first comparison pose, (n_modes,) [Hz].
-        eigen_error: RMS per-mode relative frequency error over poses and modes [-].
-        eigen_error_eq16: RMS over poses of eq. (16)'s norm-relative error [-].
-        deflection_error: RMS displacement-normalised tip error over loads [-].
-        deflection_error_position: Same, normalised by the tip position (eq. 19) [-].
-        combined_error: :math:`\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27) [-].
-        pose_errors: Relative frequency error per pose, (m,) [-].
-        load_errors: Displacement-normalised tip error per load, (l,) [-].
-        alphas: Load levels :math:`PL^2/EI_{eq}`, (l,) [-].
-        truth_tips_m: Elastica tip positions, (l, 2) [m].
-        model_tips_m: Chain tip positions, (l, 2) [m].
-        n_starts: Multistart points per search.
-        n_poses: Number of comparison poses m.
-        pareto: Front points (eigen_error, deflection_error), sorted by deflection error.
-        n_free_parameters: Free design parameters (fractions less the simplex, factors).
-        n_matched: Matched quantities (frequencies over poses, plus two tip coordinates per
-            load when the objective uses deflection).
-        determinacy: ``"exactly determined"`` (n_free >= n_matched: the residual is zero up to
-            round-off on a manifold and says nothing of quality) or ``"over-determined"``.
-        metrics: What was minimised, ``"pinflex"`` or ``"paper"`` (see
-            :class:`~pinflex.prbdm.problem.MappingProblem`).
-        eq15a_sum: Eq. (15a) with eq. (16) summed over this fit's own poses [-].
-        eq15a_mean: The same divided by the number of poses [-].
-        n_evaluations: Residual evaluations spent by all searches of the fit (finite
-            differences included; one analytic evaluation yields residuals and Jacobian).
-    """
-
-    beam: str
-    n_joints: int
-    n_modes: int
-    objective: str
-    stiffness_law: str
-    link_fractions: tuple[float, ...]
-    link_lengths_m: tuple[float, ...]
-    stiffness: tuple[float, ...]
-    correction_factors: tuple[float, ...]
-    truth_hz: tuple[float, ...]
-    model_hz: tuple[float, ...]
-    eigen_error: float
-    eigen_error_eq16: float
-    deflection_error: float
-    deflection_error_position: float
-    combined_error: float
-    pose_errors: tuple[float, ...]
-    load_errors: tuple[float, ...]
-    alphas: tuple[float, ...]
-    truth_tips_m: tuple[tuple[float, float], ...]
-    model_tips_m: tuple[tuple[float, float], ...]
-    n_starts: int
-    n_poses: int
-    pareto: tuple[tuple[float, float], ...] = field(default=())
-    n_free_parameters: int = 0
-    n_matched: int = 0
-    determinacy: str = ""
-    metrics: str = "pinflex"
-    eq15a_sum: float = float("nan")
-    eq15a_mean: float = float("nan")
-    n_evaluations: int = 0
-
-    @property
-    def exactly_determined(self) -> bool:
-        """True when the free parameters are at least as many as the matched quantities.
-
-        Such a fit can match its targets to round-off along a whole manifold of designs; its
-        residual is not a measure of model quality and is not reported as a loss.
-        """
-        return self.determinacy == "exactly determined"
-
-    def to_dict(self) -> dict:
-        """Plain-Python dictionary (JSON-ready); ``link_lengths`` aliases the lengths [m]."""
-        out = asdict(self)
-        out["link_lengths"] = list(self.link_lengths_m)
-        return out
-
-    def to_json(self, indent: int | None = None) -> str:
-        """JSON text of :meth:`to_dict` (NaN written as null).
-
-        Args:
-            indent: Indentation passed to :func:`json.dumps` (None: one line).
-
-        Returns:
-            The JSON text.
-        """
-        return json.dumps(_nan_to_none(self.to_dict()), indent=indent)
-
-    def chain(self, planform: Planform) -> PrbdmChain:
-        """Pinocchio chain of the fitted model (static stiffness).
-
-        Args:
-            planform: The beam the fit was made for (its mass and inertia go to the links).
-
-        Returns:
-            :class:`PrbdmChain` with the fitted link fractions (n + 1,) and spring
-            stiffnesses (n,) [N m/rad].
-
-        Raises:
-            InvalidChain: The stored fractions or stiffnesses are not a valid chain.
-            InvalidBeam: The planform cannot carry an nR chain (depth taper or zero tip width).
-        """
-        return build_chain(planform, np.array(self.link_fractions), np.array(self.stiffness))
-
-
-def _nan_to_none(value):
-    if isinstance(value, dict):
-        return {k: _nan_to_none(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_nan_to_none(v) for v in value]
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
 
 
 def _weights(problem: MappingProblem, kind: str, weight: float | None) -> tuple[float, float]:
@@ -441,10 +312,12 @@ def pareto_front(problem: MappingProblem, eigen_x: np.ndarray, deflection_x: np.
 
 def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
               objective: str = "combined", stiffness_law: str = "segment",
-              poses: str | np.ndarray = "straight", n_starts: int = 16, seed: int = 0,
-              truth: TruthData | None = None, pareto_points: int = 7,
+              poses: str | np.ndarray = "straight", n_starts: int | None = None,
+              seed: int = 0, truth: TruthData | None = None, pareto_points: int = 7,
               progress: bool = False, jacobian: str = "analytic",
-              metrics: str = "pinflex") -> PrbdmFit:
+              metrics: str = "pinflex", definitions: str = "pinflex",
+              epsilon: float | None = None, code_force_n: float | None = None,
+              n_samples: int | None = None) -> PrbdmFit:
     """Fit an nR PRBDM to a beam.
 
     Args:
@@ -458,7 +331,8 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         stiffness_law: ``"segment"`` (pose-independent physical springs with per-joint factors)
             or ``"paper"`` (eq. 14, per-pose factors).
         poses: Comparison poses for frequencies, see :func:`~pinflex.prbdm.problem.build_problem`.
-        n_starts: Multistart points per search.
+        n_starts: Multistart points per search (default 16); with the paper's definitions,
+            the polished starts of the global search (default 48 eigen-only, 8 otherwise).
         seed: Seed of the start points.
         truth: Precomputed truth (:func:`~pinflex.prbdm.problem.compute_truth`).
         pareto_points: Interior weights of the Pareto sweep.
@@ -466,6 +340,21 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         jacobian: ``"analytic"`` (exact derivatives on one chain updated in place, default) or
             ``"finite-difference"`` (the reference path, several times slower).
         metrics: ``"pinflex"`` (default) or ``"paper"`` (minimise eq. 16 / eq. 19 residuals).
+        definitions: ``"pinflex"`` (default: the settings above), ``"paper-code"`` (what the
+            paper's code computes: eq. 14 with the links' rotational inertia, poses 0.1 :
+            0.01 : pi/(2n), eigenvalues against omega^2, means over poses, its deflection
+            case; objectives eigen, deflection, combined) or ``"paper-text"`` (the text as
+            printed: eq. 14 with the second moment of area, xi = 0.05 and epsilon, eq. 15a
+            summed over poses on frequencies, eq. 19 with the mean factor). Both readings
+            fit one factor per pose by a global search over the link fractions
+            (:mod:`pinflex.prbdm.posedfit`), except the text reading's objectives with
+            deflection, which are this function's least-squares searches with the paper's
+            law, poses and metrics. ``stiffness_law``, ``poses`` and ``metrics`` must then be
+            left at their defaults; the paper's losses are in ``fit.losses``.
+        epsilon: Pose step of the paper's definitions [rad] (default: text 0.1, code 0.01).
+        code_force_n: Tip force of the code's deflection case [N] (default: the force that
+            deflects the beam's tip by 0.1437 L, as the code's 1 MN did on its beam).
+        n_samples: Global sample size of the paper's definitions' search.
 
     Returns:
         The fit; for ``"pareto"`` the front is in ``fit.pareto`` and the returned model is the
@@ -478,6 +367,20 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
     """
     if objective not in OBJECTIVES:
         raise InvalidChain(f"objective = {objective!r}; expected one of {OBJECTIVES}")
+    if definitions not in DEFINITIONS:
+        raise InvalidChain(f"definitions = {definitions!r}; expected one of {DEFINITIONS}")
+    if definitions != "pinflex":
+        if (stiffness_law, metrics) != ("segment", "pinflex") or not isinstance(poses, str) \
+                or poses != "straight":
+            raise InvalidChain(f"definitions = {definitions!r} sets the law, poses and metrics; "
+                               "leave stiffness_law, poses and metrics at their defaults")
+        if definitions == "paper-code" or objective == "eigen":
+            return fit_by_definitions(planform, n_joints, n_modes, objective, definitions,
+                                      truth, epsilon, code_force_n, n_samples, n_starts, seed,
+                                      progress)
+        step = PAPER_EPS_SINGLE if epsilon is None else float(epsilon)
+        poses, stiffness_law, metrics = PAPER_TEXT.poses(n_joints, step=step), "paper", "paper"
+    n_starts = 16 if n_starts is None else int(n_starts)
     problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth, metrics)
     front: list[tuple[np.ndarray, Evaluation]] = []
     count = [0]
@@ -501,46 +404,10 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
     else:
         x, ev = multistart(problem, objective, n_starts, seed, progress, jacobian=jacobian,
                            counter=count)
-    return _make_fit(problem, x, ev, objective, n_starts, front, count[0])
-
-
-def determinacy_counts(problem: MappingProblem, objective: str) -> tuple[int, int]:
-    """(free parameters, matched quantities) of a mapping with the given objective."""
-    n_free = problem.n_params - 1
-    n_freq = int(problem.poses.shape[0]) * problem.n_modes
-    n_tip = 2 * int(problem.forces_n.shape[0])
-    matched = {"eigen": n_freq, "deflection": n_tip}.get(objective, n_freq + n_tip)
-    return n_free, matched
-
-
-def _make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective: str,
-              n_starts: int, front: list, n_evaluations: int = 0) -> PrbdmFit:
-    gamma, factors = decode(problem, x)
-    gamma = gamma / gamma.sum()
-    stiffness = static_stiffness(problem, gamma, factors)
-
-    def tup(a) -> tuple:
-        return tuple(float(v) for v in np.asarray(a).ravel())
-
-    n_free, n_matched = determinacy_counts(problem, objective)
-
-    return PrbdmFit(
-        beam=problem.planform.name, n_joints=problem.n_joints, n_modes=problem.n_modes,
-        objective=objective, stiffness_law=problem.stiffness_law, link_fractions=tup(gamma),
-        link_lengths_m=tup(gamma * problem.planform.length_m), stiffness=tup(stiffness),
-        correction_factors=tup(factors), truth_hz=tup(problem.truth_hz),
-        model_hz=tup(ev.model_hz[0]), eigen_error=ev.eigen_error,
-        eigen_error_eq16=ev.eigen_error_eq16,
-        deflection_error=ev.deflection_error,
-        deflection_error_position=ev.deflection_error_position,
-        combined_error=ev.combined_error, pose_errors=tup(ev.pose_errors),
-        load_errors=tup(ev.load_errors), alphas=tup(problem.alphas),
-        truth_tips_m=tuple(tup(t) for t in problem.truth_tips_m),
-        model_tips_m=tuple(tup(t) for t in ev.model_tips_m), n_starts=n_starts,
-        n_poses=int(problem.poses.shape[0]),
-        pareto=tuple((float(p[1].eigen_error), float(p[1].deflection_error)) for p in front),
-        n_free_parameters=n_free, n_matched=n_matched,
-        determinacy="exactly determined" if n_free >= n_matched else "over-determined",
-        metrics=problem.metrics, eq15a_sum=ev.eq15a_sum, eq15a_mean=ev.eq15a_mean,
-        n_evaluations=int(n_evaluations),
-    )
+    if definitions == "paper-text":
+        losses = paper_losses(problem, x, step)
+        return make_fit(problem, x, ev, objective, n_starts, front, count[0],
+                        definitions=definitions,
+                        losses={k: getattr(losses, k) for k in
+                                ("eq15a_sum", "eq15a_mean", "eq19_rms", "eq27_sum")})
+    return make_fit(problem, x, ev, objective, n_starts, front, count[0])

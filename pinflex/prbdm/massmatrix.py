@@ -172,16 +172,20 @@ def mass_structure(lengths: np.ndarray, mu: np.ndarray, dmu: np.ndarray):
 
 
 def mass_g(lengths: np.ndarray, links: tuple, s: np.ndarray) -> np.ndarray:
-    """G of :func:`mass_structure` alone (no derivatives), from the links' properties."""
-    ix = chain_indices(lengths.size)
+    """G of :func:`mass_structure` alone (no derivatives), from the links' properties.
+
+    Leading dimensions (several designs) are carried through: lengths, s and the link
+    arrays of shape (..., n) give G of shape (..., n, n).
+    """
+    ix = chain_indices(lengths.shape[-1])
     mass, com, _, iyy = links[:4]
     arm = com - s
     m1 = mass * arm
-    outboard = np.zeros(lengths.size)
-    outboard[:-1] = np.cumsum(mass[:0:-1])[::-1]        # T_b = sum_{j>b} m_j
+    outboard = np.zeros_like(mass)
+    outboard[..., :-1] = np.cumsum(mass[..., :0:-1], axis=-1)[..., ::-1]   # T_b = sum_{j>b} m_j
     h = lengths * outboard + m1
-    g = lengths[ix.lower] * h[ix.upper]
-    g[ix.idx, ix.idx] = lengths**2 * outboard + iyy + mass * arm**2
+    g = lengths[..., ix.lower] * h[..., ix.upper]
+    g[..., ix.idx, ix.idx] = lengths**2 * outboard + iyy + mass * arm**2
     return g
 
 

@@ -6,3 +6,5 @@ OBJECTIVES = ("eigen", "deflection", "combined", "pareto")
 STIFFNESS_LAWS = ("segment", "paper")
 #: Load levels PL²/EI of the elastica reference (paper 001).
 DEFAULT_ALPHAS = (0.5, 1.0, 2.0, 5.0)
+#: Sets of definitions a fit is made and scored by (:mod:`pinflex.prbdm.paper`).
+DEFINITIONS = ("pinflex", "paper-text", "paper-code")

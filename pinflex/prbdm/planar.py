@@ -107,8 +107,8 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
     every absolute link angle between the axis and the force), vectorised over loads.
 
     Args:
-        k: Spring stiffness (n,) [N m/rad].
-        ell: Lengths of links 1..n (n,) [m].
+        k: Spring stiffness (n,), or one row per load (l, n) [N m/rad].
+        ell: Lengths of links 1..n (n,), or one row per load (l, n) [m].
         forces: Tip forces (l, 2) [N].
         theta0: Starting angles (l, n) [rad].
         load_steps: Equal load increments.
@@ -123,7 +123,8 @@ def planar_statics(k: np.ndarray, ell: np.ndarray, forces: np.ndarray, theta0: n
     ix = planar_indices(n)
     top, prefix, suffix_sum = ix.top, ix.prefix, ix.suffix
     ok = np.ones(n_l, dtype=bool)
-    k_diag = ix.eye * k
+    k = np.asarray(k, dtype=float)
+    k_diag = ix.eye * (k[:, None, :] if k.ndim == 2 else k)
     fx_all, fz_all = forces[:, :1], forces[:, 1:]
     # Rows: the residual K theta - tau, then its two terms K theta and tau (one reduction
     # gives the three norms of the convergence test).

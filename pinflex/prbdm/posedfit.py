@@ -1,0 +1,408 @@
+r"""Global fits with one stiffness correction factor per pose, the factors solved exactly.
+
+The objective of a design is evaluated at its best factors (:func:`best_factors`):
+
+* **eigen-only**: the closed form of :mod:`pinflex.prbdm.perpose`;
+* **deflection** (the code's definitions: pose i's statics use pose i's springs): the error
+  d(k) depends on the factor alone, and one factor, d's minimum, serves every pose;
+* **combined** (eq. 27, :math:`F = \sqrt{A^2 + B^2}` of the aggregated frequency loss A and
+  deflection loss B): F is stationary where every pose's factor minimises
+  :math:`e_i(k) + \rho\,d(k)` with :math:`\rho = B/A`. For a given :math:`\rho` each pose's
+  factor is the root of :math:`e_i' + \rho\,d'` between its frequency optimum and d's
+  minimum (safeguarded Newton); B/A falls as :math:`\rho` grows, and :math:`\rho = B/A` is
+  found by bisection on :math:`\log\rho`.
+
+d(k) is computed by batched Newton statics on a grid of factors, uniform in log k and
+widened until it holds d's minimum and every pose's frequency optimum, and interpolated by
+cubic Hermite pieces with spline slopes. The reported losses are recomputed with exact
+statics at the factors found; since the factors are stationary, an interpolation error
+enters the value only to second order.
+
+The fractions are searched globally (:func:`fit_posed`): a uniform sample of the feasible
+simplex (eq. 15b-d) evaluated in batches, and SLSQP polishes of its best distinct samples.
+Every polished value is kept, so the stability of the optimum over starts is part of the
+result.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.optimize import minimize
+
+from ..exceptions import InvalidChain, MappingFailed
+from ..progress import ProgressBar
+from .perpose import (
+    PosedProblem,
+    deflection_errors,
+    eigen_loss,
+    eigen_terms,
+    per_mode_errors,
+    pose_errors,
+)
+from .problem import MIN_FRACTION
+
+#: Objectives of a per-pose-factor fit.
+PER_POSE_OBJECTIVES = ("eigen", "deflection", "combined")
+#: Statics grid of the factor per design (uniform in log k).
+GRID = 40
+
+
+@dataclass(frozen=True)
+class PoseFactors:
+    """The best factors of designs and their losses under the problem's definitions.
+
+    Attributes:
+        value: The objective (eigen, deflection or eq. 27 combined), (S,) [-].
+        factors: Correction factor per pose, (S, m).
+        frequency: Aggregated frequency loss, (S,) [-].
+        deflection: Aggregated deflection loss, (S,) (NaN when not computed) [-].
+        pose_frequency: Frequency loss per pose, (S, m).
+        pose_deflection: Deflection error per pose, (S, m) (NaN when not computed).
+    """
+
+    value: np.ndarray
+    factors: np.ndarray
+    frequency: np.ndarray
+    deflection: np.ndarray
+    pose_frequency: np.ndarray
+    pose_deflection: np.ndarray
+
+
+class _Curves:
+    """d(u) of S designs, u = log k, as cubic Hermite pieces on a uniform grid per design."""
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, values: np.ndarray):
+        self.u0 = np.log(lo)
+        self.h = np.log(hi / lo) / (GRID - 1)
+        self.y = values
+        t = np.arange(GRID, dtype=float)
+        self.dy = CubicSpline(t, values, axis=1)(t, 1)       # slopes per grid step
+
+    def __call__(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Values and first and second derivatives by u at u (S, ...), clamped to the grid."""
+        shape = u.shape
+        t = np.clip((u.reshape(shape[0], -1) - self.u0[:, None]) / self.h[:, None], 0.0,
+                    GRID - 1.0)
+        j = np.minimum(t.astype(int), GRID - 2)
+        x = t - j
+        take = np.take_along_axis
+        y0, y1 = take(self.y, j, 1), take(self.y, j + 1, 1)
+        m0, m1 = take(self.dy, j, 1), take(self.dy, j + 1, 1)
+        x2, x3 = x * x, x * x * x
+        value = (2 * x3 - 3 * x2 + 1) * y0 + (x3 - 2 * x2 + x) * m0 \
+            + (-2 * x3 + 3 * x2) * y1 + (x3 - x2) * m1
+        slope = (6 * x2 - 6 * x) * y0 + (3 * x2 - 4 * x + 1) * m0 \
+            + (-6 * x2 + 6 * x) * y1 + (3 * x2 - 2 * x) * m1
+        curve = (12 * x - 6) * (y0 - y1) + (6 * x - 4) * m0 + (6 * x - 2) * m1
+        h = self.h[:, None]
+        return value.reshape(shape), (slope / h).reshape(shape), (curve / h**2).reshape(shape)
+
+    def minimum(self) -> np.ndarray:
+        """Log factor of each design's minimum of d (best grid node refined by bisection)."""
+        j = np.clip(np.argmin(self.y, axis=1), 1, GRID - 2)
+        a = self.u0 + (j - 1) * self.h
+        b = self.u0 + (j + 1) * self.h
+        return _bisect(lambda u: self(u)[1:], a[:, None], b[:, None], 40)[:, 0]
+
+
+def _bisect(slope: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], a: np.ndarray,
+            b: np.ndarray, iterations: int = 12) -> np.ndarray:
+    """Root of an increasing function between a and b (elementwise): safeguarded Newton.
+
+    ``slope(u)`` returns the function and its derivative. A Newton step that leaves the
+    bracket, or meets a non-positive derivative, is replaced by the bracket's midpoint.
+    """
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    x = 0.5 * (lo + hi)
+    for _ in range(iterations):
+        f, df = slope(x)
+        lo, hi = np.where(f < 0.0, x, lo), np.where(f < 0.0, hi, x)
+        step = x - f / np.where(df > 0.0, df, 1.0)
+        good = (df > 0.0) & (step > lo) & (step < hi)
+        x = np.where(good, step, 0.5 * (lo + hi))
+    return x
+
+
+def _deflection_curves(problem: PosedProblem, gammas: np.ndarray, lo: np.ndarray,
+                       hi: np.ndarray) -> _Curves:
+    """The deflection error of each design on a log grid holding its minimum and [lo, hi]."""
+    lo, hi = lo / 1.5, hi * 1.5
+    t = np.linspace(0.0, 1.0, GRID)
+    d = np.empty((gammas.shape[0], GRID))
+    todo = np.arange(gammas.shape[0])
+    for _ in range(6):
+        grid = lo[todo, None] * (hi[todo, None] / lo[todo, None]) ** t
+        d[todo] = deflection_errors(problem, gammas[todo], grid)
+        best = np.argmin(d[todo], axis=1)
+        low_edge, high_edge = best == 0, best == GRID - 1
+        lo[todo[low_edge]] /= 4.0
+        hi[todo[high_edge]] *= 4.0
+        todo = todo[low_edge | high_edge]
+        if todo.size == 0:
+            break
+    return _Curves(lo, hi, d)
+
+
+def best_factors(problem: PosedProblem, gammas: np.ndarray, objective: str) -> PoseFactors:
+    """Optimal factors of designs (S, n + 1) for an objective, with exact losses."""
+    gammas = np.atleast_2d(np.asarray(gammas, dtype=float))
+    per_pose, k_eig, v = eigen_terms(problem, gammas)
+    combine = problem.definitions.combine
+    n_d, m = k_eig.shape
+    if objective == "eigen":
+        value = combine(per_pose)
+        return PoseFactors(value, k_eig, value, np.full(n_d, np.nan), per_pose,
+                           np.full((n_d, m), np.nan))
+    curves = _deflection_curves(problem, gammas, k_eig.min(1), k_eig.max(1))
+    u_d = curves.minimum()
+    if objective == "deflection":
+        u = np.repeat(u_d[:, None], m, axis=1)
+    else:
+        u = _combined_factors(problem, v, np.log(k_eig), u_d, curves)
+    factors = np.exp(u)
+    d_pose = deflection_errors(problem, gammas, factors)
+    e_pose = pose_errors(problem, v, factors)
+    freq, defl = combine(e_pose), combine(d_pose)
+    value = defl if objective == "deflection" else np.hypot(freq, defl)
+    return PoseFactors(value, factors, freq, defl, e_pose, d_pose)
+
+
+def _combined_factors(problem: PosedProblem, v: np.ndarray, u_eig: np.ndarray,
+                      u_d: np.ndarray, curves: _Curves) -> np.ndarray:
+    """Per-pose log factors minimising eq. (27) (see the module docstring), (S, m)."""
+    w = problem.target
+    ww = float(w @ w)
+    vv, vw = np.einsum("smk,smk->sm", v, v), v @ w
+    hz = problem.definitions.compare == "hz"
+    combine = problem.definitions.combine
+    lower = np.minimum(u_eig, u_d[:, None])
+    upper = np.maximum(u_eig, u_d[:, None])
+
+    def frequency(u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        # e(c) = sqrt(c^2 v.v - 2 c v.w + w.w) / |w| with c = k (or sqrt(k)) = exp(kappa u).
+        kappa = 0.5 if hz else 1.0
+        c = np.exp(kappa * u)
+        e = np.sqrt(np.clip(c * c * vv - 2.0 * c * vw + ww, 0.0, None) / ww)
+        safe = np.maximum(e, 1e-300)
+        de_dc = (c * vv - vw) / (ww * safe)
+        d2e_dc2 = (vv - de_dc**2 * ww) / (ww * safe)
+        return e, de_dc * kappa * c, d2e_dc2 * (kappa * c) ** 2 + de_dc * kappa**2 * c
+
+    def factors_for(log_rho: np.ndarray) -> np.ndarray:
+        rho = np.exp(log_rho)[:, None]
+
+        def slope(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            _, de, d2e = frequency(u)
+            _, dd, d2d = curves(u)
+            return de + rho * dd, d2e + rho * d2d
+
+        return _bisect(slope, lower, upper)
+
+    # At the optimum rho = B / A; B / A falls as rho grows (the factors move towards d's
+    # minimum), so the root of log(B / A) - log(rho) is found by bisection on log(rho).
+    n_d = u_eig.shape[0]
+    a, b = np.full(n_d, -20.0), np.full(n_d, 20.0)
+    for _ in range(36):
+        mid = 0.5 * (a + b)
+        u = factors_for(mid)
+        ratio = combine(curves(u)[0]) / np.maximum(combine(frequency(u)[0]), 1e-300)
+        above = np.log(np.maximum(ratio, 1e-300)) > mid
+        a, b = np.where(above, mid, a), np.where(above, b, mid)
+    return factors_for(0.5 * (a + b))
+
+
+@dataclass(frozen=True)
+class PosedFit:
+    """Result of a per-pose-factor fit.
+
+    Attributes:
+        gamma: Link fractions of links 0..n, (n + 1,).
+        factors: Correction factor per pose, (m,).
+        value: The objective at the optimum [-].
+        frequency: Aggregated frequency loss [-].
+        deflection: Aggregated deflection loss (NaN for eigen-only) [-].
+        pose_frequency: Frequency loss per pose, (m,).
+        mode_errors: Relative frequency error f / f_truth - 1 per pose and mode, (m, n_modes).
+        start_values: The polished value of every start, ascending [-].
+        n_samples: Designs of the global sample.
+        n_evaluations: Designs evaluated by the sample and the polishes.
+    """
+
+    gamma: np.ndarray
+    factors: np.ndarray
+    value: float
+    frequency: float
+    deflection: float
+    pose_frequency: np.ndarray
+    mode_errors: np.ndarray
+    start_values: np.ndarray
+    n_samples: int
+    n_evaluations: int
+
+    @property
+    def n_starts(self) -> int:
+        """Number of polished starts."""
+        return int(self.start_values.size)
+
+    def within(self, fraction: float) -> int:
+        """Number of starts whose value is within ``fraction`` (relative) of the best."""
+        best = self.start_values[0]
+        return int(np.count_nonzero(self.start_values <= best * (1.0 + fraction)))
+
+
+def cube_to_fractions(u: np.ndarray) -> np.ndarray:
+    """Map points of the unit cube (S, n) onto the feasible fractions (S, n + 1), uniformly.
+
+    Stick breaking with Beta(1, n - i) quantiles maps the uniform cube onto the uniform
+    simplex; the fractions are then 0.02 + (1 - 0.02 (n + 1)) times a simplex point.
+    """
+    u = np.atleast_2d(u)
+    n_d, n = u.shape
+    free = 1.0 - MIN_FRACTION * (n + 1)
+    if free <= 0.0:
+        raise InvalidChain(f"{n}R needs {n + 1} links of at least {MIN_FRACTION} of the "
+                           "length; use fewer joints")
+    out = np.empty((n_d, n + 1))
+    rest = np.ones(n_d)
+    for i in range(n):
+        piece = rest * (1.0 - (1.0 - np.clip(u[:, i], 0.0, 1.0)) ** (1.0 / (n - i)))
+        out[:, i] = piece
+        rest = rest - piece
+    out[:, n] = rest
+    return MIN_FRACTION + free * out
+
+
+def feasible_sample(n_joints: int, count: int, seed: int) -> np.ndarray:
+    """Uniform sample of the feasible fractions: the simplex with every fraction >= 0.02."""
+    rng = np.random.default_rng(seed)
+    return cube_to_fractions(rng.uniform(size=(count, n_joints)))
+
+
+def objective_values(problem: PosedProblem, gammas: np.ndarray, objective: str) -> np.ndarray:
+    """The objective of designs (S, n + 1) at their best factors, (S,)."""
+    if objective == "eigen":
+        return eigen_loss(problem, gammas)
+    return best_factors(problem, gammas, objective).value
+
+
+def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: float,
+            counter: list[int]) -> tuple[float, np.ndarray]:
+    """SLSQP on the first n fractions (the last one closes the simplex) from gamma0.
+
+    Each gradient is a forward difference, its n + 1 designs evaluated in one batch.
+    """
+    n = problem.n_joints
+    step = 1e-7 if objective == "eigen" else 1e-6
+
+    def designs(points: np.ndarray) -> np.ndarray:
+        return np.column_stack([points, 1.0 - points.sum(1)])
+
+    cache: dict[bytes, tuple[float, np.ndarray]] = {}
+
+    def value_and_grad(z: np.ndarray) -> tuple[float, np.ndarray]:
+        key = z.tobytes()
+        if key not in cache:
+            points = np.repeat(z[None], n + 1, axis=0)
+            points[1:] += step * np.eye(n)
+            values = objective_values(problem, designs(points), objective)
+            counter[0] += n + 1
+            cache.clear()
+            cache[key] = (float(values[0]), (values[1:] - values[0]) / step)
+        return cache[key]
+
+    cons = [{"type": "ineq", "fun": lambda z: 1.0 - z.sum() - MIN_FRACTION,
+             "jac": lambda z: -np.ones_like(z)}]
+    bounds = [(MIN_FRACTION, 1.0 - MIN_FRACTION * n)] * n
+    z0 = np.asarray(gamma0[:n], dtype=float)
+    res = minimize(lambda z: value_and_grad(z)[0], z0, jac=lambda z: value_and_grad(z)[1],
+                   method="SLSQP", bounds=bounds, constraints=cons,
+                   options={"maxiter": 200, "ftol": tol})
+    z = np.clip(res.x, MIN_FRACTION, None)
+    z = z if 1.0 - z.sum() >= MIN_FRACTION * (1.0 - 1e-9) else z0
+    candidates = designs(np.array([z, z0]))
+    values = objective_values(problem, candidates, objective)
+    counter[0] += 2
+    best = int(np.argmin(values))
+    return float(values[best]), candidates[best]
+
+
+#: Global sample and polished starts of the eigen-only and the deflection objectives.
+EIGEN_SAMPLES, EIGEN_STARTS = 65536, 48
+DEFLECTION_SAMPLES, DEFLECTION_STARTS = 1024, 8
+
+
+def fit_posed(problem: PosedProblem, objective: str = "eigen", n_samples: int | None = None,
+              n_starts: int | None = None, seed: int = 0, progress: bool = False,
+              tol: float = 1e-12) -> PosedFit:
+    """Global search over the link fractions, the factors solved per pose.
+
+    A uniform sample of the feasible fractions is evaluated in batches; the best samples
+    that lie more than 0.02 (in every fraction) from a better chosen one are polished by
+    SLSQP, and the best polished design is the fit. Every start's polished value is kept
+    (:attr:`PosedFit.start_values`), so the stability of the optimum is part of the result.
+    The landscape has many narrow basins (the eigen-only loss of a 5R chain on a random
+    beam has a dozen local optima within a factor of four of the best), so the sample is
+    large: its cost is a batched eigenvalue problem per design.
+
+    Args:
+        problem: The fit.
+        objective: ``"eigen"``, ``"deflection"`` or ``"combined"`` (eq. 27).
+        n_samples: Sample size; default 65,536 for eigen-only and 1,024 with deflection.
+        n_starts: Polished starts; default 48 for eigen-only and 8 with deflection.
+        seed: Seed of the sample.
+        progress: Show a progress bar on stderr.
+        tol: Function tolerance of the polish.
+
+    Raises:
+        InvalidChain: For an unknown objective or missing loads.
+        MappingFailed: If no start gives a finite loss.
+    """
+    if objective not in PER_POSE_OBJECTIVES:
+        raise InvalidChain(f"objective = {objective!r}; expected one of {PER_POSE_OBJECTIVES}")
+    if objective != "eigen" and problem.forces_n.shape[0] == 0:
+        raise InvalidChain(f"the {objective} objective needs loads (forces_n)")
+    eigen = objective == "eigen"
+    count = int(n_samples if n_samples is not None
+                else EIGEN_SAMPLES if eigen else DEFLECTION_SAMPLES)
+    starts = int(n_starts if n_starts is not None else EIGEN_STARTS if eigen
+                 else DEFLECTION_STARTS)
+    if count < 1 or starts < 1:
+        raise InvalidChain(f"n_samples = {count} and n_starts = {starts} must be positive")
+    n = problem.n_joints
+    sample = feasible_sample(n, count, seed)
+    chunk = 1024 if eigen else 64
+    pieces = np.array_split(sample, max(1, -(-count // chunk)))
+    bar = ProgressBar(len(pieces) + starts, f"{n}R {objective}", progress)
+    values = []
+    for piece in pieces:
+        values.append(objective_values(problem, piece, objective))
+        bar.update(best=float(np.nanmin(values[-1])))
+    value_all = np.concatenate(values)
+    chosen: list[np.ndarray] = []
+    for i in np.argsort(np.where(np.isfinite(value_all), value_all, np.inf)):
+        if not np.isfinite(value_all[i]) or len(chosen) == starts:
+            break
+        if all(np.max(np.abs(sample[i] - c)) > 0.02 for c in chosen):
+            chosen.append(sample[i])
+    counter = [count]
+    results: list[tuple[float, np.ndarray]] = []
+    for gamma0 in chosen:
+        value, gamma = _polish(problem, objective, gamma0, tol, counter)
+        if np.isfinite(value):
+            results.append((value, gamma))
+        bar.update(best=min((r[0] for r in results), default=np.inf))
+    if not results:
+        raise MappingFailed(f"no start of the {objective} fit of {n}R gave a finite loss")
+    results.sort(key=lambda r: r[0])
+    gamma = results[0][1]
+    best = best_factors(problem, gamma[None], objective)
+    _, _, v = eigen_terms(problem, gamma[None])
+    factors = best.factors[0]
+    return PosedFit(gamma, factors, float(best.value[0]), float(best.frequency[0]),
+                    float(best.deflection[0]), best.pose_frequency[0],
+                    per_mode_errors(problem, v[0], factors),
+                    np.array([r[0] for r in results]), count, counter[0])
