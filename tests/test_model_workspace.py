@@ -215,3 +215,76 @@ def test_two_threads_on_one_model_equal_the_serial_results():
     for k in range(2):
         np.testing.assert_allclose(out[k], np.concatenate([serial[k], serial[k]]), rtol=1e-12)
         np.testing.assert_allclose(out_modes[k], serial_modes[k], rtol=1e-12)
+
+
+def test_design_values_per_call_give_fresh_numbers_on_every_path():
+    """Design values passed per call after a first call: every path answers the values given.
+
+    The one-pose layout, the solve plan and the tracking maps are built at the first call;
+    none of them may keep that call's design values.
+    """
+    model = FlexibleModel(TWO_LINK, planar=True)  # m1, m2 are the design masses
+    _warm(model)
+    for y in ([0.2, 0.05], [0.0, 0.25], [0.125, 0.125]):
+        _, ref = planar_two_link_frequencies(Q0, *y)
+        np.testing.assert_allclose(model.frequencies(Q0, y), ref, rtol=1e-9)
+        np.testing.assert_allclose(model.modes(Q0, y).freq_hz, ref, rtol=1e-9)
+        for q, f in zip(POSES, model.frequencies(POSES, y)):
+            np.testing.assert_allclose(f, planar_two_link_frequencies(q, *y)[1], rtol=1e-9)
+        # the tracked walk equals that of a model never used before
+        unused = FlexibleModel(TWO_LINK, planar=True)
+        np.testing.assert_allclose(track_modes(model, POSES, y, modes=(1, 2)).freq_hz,
+                                   track_modes(unused, POSES, y, modes=(1, 2)).freq_hz,
+                                   rtol=1e-12)
+
+
+def test_two_threads_on_different_paths_of_one_model_equal_the_serial_results():
+    """One thread batched frequencies, modes and tracking, the other one-pose calls.
+
+    A guard for the per-thread workspace of the batched and tracking paths. On a model with
+    one shared Pinocchio Data it fails only now and then; the test above catches that race
+    on the one-pose route reliably.
+    """
+    model = FlexibleModel(TWO_LINK)
+    rng = np.random.default_rng(5)
+    P = rng.uniform(-2, 2, size=(60, model.nv))
+    walk = np.linspace(P[0], P[1], 8)
+    serial_one = np.array([model.frequencies(q, n_modes=4) for q in P])
+    serial_batch = model.frequencies(P, n_modes=4)
+    serial_track = track_modes(model, walk, modes=(1, 2)).freq_hz
+    serial_modes = np.array([model.modes(q, n_modes=2).freq_hz for q in P])
+    out: dict = {}
+    errors: list = []
+
+    def one_pose():
+        try:
+            out["one"] = np.array([model.frequencies(q, n_modes=4) for q in P for _ in (0, 1)])
+        except Exception as exc:  # pragma: no cover - reported below
+            errors.append(exc)
+
+    def batched():
+        try:
+            out["batch"], out["modes"] = [], []
+            for i in range(0, 60, 20):
+                out["batch"].append(model.frequencies(P[i:i + 20], n_modes=4))
+                out["modes"] += [model.modes(q, n_modes=2).freq_hz for q in P[i:i + 20]]
+            out["track"] = [track_modes(model, walk, modes=(1, 2)).freq_hz for _ in range(3)]
+        except Exception as exc:  # pragma: no cover - reported below
+            errors.append(exc)
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-5)
+    try:
+        threads = [threading.Thread(target=one_pose), threading.Thread(target=batched)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        sys.setswitchinterval(old)
+    assert not errors, errors
+    np.testing.assert_allclose(out["one"], np.repeat(serial_one, 2, axis=0), rtol=1e-12)
+    np.testing.assert_allclose(np.concatenate(out["batch"]), serial_batch, rtol=1e-12)
+    np.testing.assert_allclose(np.array(out["modes"]), serial_modes, rtol=1e-12)
+    for f in out["track"]:
+        np.testing.assert_allclose(f, serial_track, rtol=1e-12)
