@@ -237,6 +237,40 @@ def track(
     Returns:
         A :class:`ModeTracking`.
     """
+    lam, phi, modes, mass = _track_inputs(eigvals, shapes, mass, modes, start)
+    ns, n = lam.shape
+
+    def weight(s):
+        return None if mass is None else mass[s]
+
+    def moved(x, src, dst):  # shapes of samples src in the coordinates of samples dst
+        return x if pose_map is None else pose_map.move(x, src, dst)
+
+    perm, mac_step = _walk(phi, mass, start, start_shapes, pose_map)
+    ambiguous: list[tuple[int, int, float]] = []
+    for r in range(n):
+        bad = np.flatnonzero(mac_step[:, r] < mac_min)
+        ambiguous.extend((int(s), r, float(mac_step[s, r])) for s in bad)
+    mac_ref = _reference_macs(phi, mass, perm, start, pose_map)
+    tracked = np.take_along_axis(lam, perm, axis=1)  # (ns, n) by slot
+    events = _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac,
+                     mac_step, moved)
+    cols = [m - 1 for m in modes]
+    return ModeTracking(
+        modes=modes,
+        eigvals=tracked[:, cols],
+        order=perm[:, cols] + 1,
+        sorted_eigvals=lam,
+        permutation=perm,
+        mac_step=mac_step[:, cols],
+        mac_reference=mac_ref[:, cols],
+        events=tuple(sorted(events, key=lambda e: (e.sample, e.kind, e.modes))),
+        reference=int(start),
+    )
+
+
+def _track_inputs(eigvals, shapes, mass, modes, start):
+    """:func:`track`'s inputs checked: eigenvalues, shapes, mode numbers, masses."""
     lam = np.asarray(eigvals, dtype=float)
     phi = np.asarray(shapes, dtype=float)
     if lam.ndim != 2 or phi.ndim != 3 or phi.shape[0] != lam.shape[0] or \
@@ -256,28 +290,29 @@ def track(
             raise ConfigurationError(
                 f"mass has shape {mass.shape}; expected {(ns, phi.shape[1], phi.shape[1])}"
             )
+    return lam, phi, modes, mass
 
-    def weight(s):
-        return None if mass is None else mass[s]
 
-    def moved(x, src, dst):  # shapes of samples src in the coordinates of samples dst
-        return x if pose_map is None else pose_map.move(x, src, dst)
+def _walk(phi, mass, start, start_shapes, pose_map):
+    """Slot permutation (ns, n) from sample ``start`` both ways, and the MAC of each step.
 
-    perm = np.full((ns, n), -1, dtype=int)  # slot r (reference sorted index) -> sorted index
+    Slot r is the reference sorted index r; ``perm[s, r]`` its sorted index at sample s.
+    """
+    ns, _, n = phi.shape
+    perm = np.full((ns, n), -1, dtype=int)
     mac_step = np.ones((ns, n))
-    ambiguous: list[tuple[int, int, float]] = []
     if start_shapes is None:
         perm[start] = np.arange(n)
     else:
-        C0 = mac_matrix(np.asarray(start_shapes, dtype=float), phi[start], weight(start))
+        C0 = mac_matrix(np.asarray(start_shapes, dtype=float), phi[start],
+                        None if mass is None else mass[start])
         rows, cols = linear_sum_assignment(-C0)
         perm[start, rows] = cols
         mac_step[start, rows] = C0[rows, cols]
-    ref_shapes = phi[start][:, perm[start]]  # reference shape of each slot, at `start`
     # MAC of sorted modes between consecutive samples, all steps at once: C[s] pairs the
     # sorted modes of sample s (rows) with those of s + 1 (columns), weighted with M[s + 1].
     C = _step_macs(phi, mass, None if pose_map is None else
-                   moved(phi[:-1], np.arange(ns - 1), np.arange(1, ns)))
+                   pose_map.move(phi[:-1], np.arange(ns - 1), np.arange(1, ns)))
     fwd, bwd = _step_maps(C)  # sorted index at s -> at s + 1, and back
     ident = np.all(fwd == np.arange(n), axis=1)  # steps that keep every sorted index
     perm[start:] = perm[start]
@@ -291,12 +326,16 @@ def track(
         macs = C[steps, perm[:-1], perm[1:]]  # step s -> s + 1, (ns - 1, n)
         mac_step[start + 1:] = macs[start:]
         mac_step[:start] = macs[:start]
-    for r in range(n):
-        bad = np.flatnonzero(mac_step[:, r] < mac_min)
-        ambiguous.extend((int(s), r, float(mac_step[s, r])) for s in bad)
-    if pose_map is not None:
-        ref_at = moved(np.broadcast_to(ref_shapes, (ns,) + ref_shapes.shape), start,
-                       np.arange(ns))  # (ns, ndof, n)
+    return perm, mac_step
+
+
+def _reference_macs(phi, mass, perm, start, pose_map):
+    """MAC (ns, n) of each slot's tracked shape with its reference shape at ``start``."""
+    ns, _, n = phi.shape
+    ref_shapes = phi[start][:, perm[start]]  # reference shape of each slot, at `start`
+    if pose_map is not None:  # shapes in coordinates of their own sample: move the reference
+        ref_at = pose_map.move(np.broadcast_to(ref_shapes, (ns,) + ref_shapes.shape), start,
+                               np.arange(ns))  # (ns, ndof, n)
         Mref = ref_at if mass is None else mass @ ref_at
         cross = np.swapaxes(Mref, 1, 2) @ phi
         nref = np.einsum("sir,sir->sr", Mref, ref_at)
@@ -310,22 +349,7 @@ def track(
         nref = np.einsum("sir,ir->sr", Mref, ref_shapes)
     nphi = np.einsum("sik,sik->sk", phi, phi if mass is None else mass @ phi)
     idx = np.arange(ns)[:, None], np.arange(n)[None, :], perm
-    mac_ref = cross[idx] ** 2 / (nref * np.take_along_axis(nphi, perm, axis=1))
-    tracked = np.take_along_axis(lam, perm, axis=1)  # (ns, n) by slot
-    events = _events(lam, phi, weight, perm, tracked, start, ambiguous, veer_rtol, veer_mac,
-                     mac_step, moved)
-    cols = [m - 1 for m in modes]
-    return ModeTracking(
-        modes=modes,
-        eigvals=tracked[:, cols],
-        order=perm[:, cols] + 1,
-        sorted_eigvals=lam,
-        permutation=perm,
-        mac_step=mac_step[:, cols],
-        mac_reference=mac_ref[:, cols],
-        events=tuple(sorted(events, key=lambda e: (e.sample, e.kind, e.modes))),
-        reference=int(start),
-    )
+    return cross[idx] ** 2 / (nref * np.take_along_axis(nphi, perm, axis=1))
 
 
 def _step_macs(phi: np.ndarray, mass: np.ndarray | None, a: np.ndarray | None = None

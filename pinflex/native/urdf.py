@@ -149,21 +149,51 @@ def urdf_from_model(model: pin.Model, name: str | None = None) -> str:
         raise ConfigurationError(
             f"expected a pinocchio.Model or RobotWrapper, got {type(model).__name__}"
         )
-    frames = model.frames
-    root, child = link_names(model)
+    tree = _Tree(model)
     robot = ET.Element("robot", {"name": name or model.name or "robot"})
-    # link of every BODY frame, and its placement in its joint's frame
-    body_of_joint = {0: root, **child}
-    link_placement: dict[str, pin.SE3] = {root: pin.SE3.Identity()}
-    link_joint: dict[str, int] = {root: 0}
-    for j, link in child.items():
-        link_placement[link] = pin.SE3.Identity()
-        link_joint[link] = j
-    for f in frames:
-        if f.type == pin.FrameType.BODY and f.name not in link_placement:
-            link_placement[f.name] = f.placement
-            link_joint[f.name] = f.parentJoint
-    # own inertia of each link: fixed-joint links keep theirs on the fixed-joint frame
+    own, fixed = _own_inertias(model, tree)
+    for link in tree.placement:
+        el = ET.SubElement(robot, "link", {"name": link})
+        if link in own:
+            _inertial(el, inertia_from_spatial(own[link]))
+    for j in range(1, model.njoints):
+        _joint_element(robot, model, tree, j)
+    for f, parent, kid in fixed:
+        _fixed_joint(robot, f.name, parent, kid, tree.placement[parent].actInv(f.placement))
+    # BODY frames added by hand without a fixed-joint frame: fixed to their joint's link
+    reached = set(tree.body_of_joint.values()) | {kid for _, _, kid in fixed}
+    for link in tree.placement:
+        if link not in reached:
+            _fixed_joint(robot, f"{link}_fixed", tree.body_of_joint[tree.joint_of[link]], link,
+                         tree.placement[link])
+    return ET.tostring(robot, encoding="unicode")
+
+
+class _Tree:
+    """Links of a Pinocchio model: the link of each joint, and every link's placement."""
+
+    def __init__(self, model: pin.Model):
+        self.root, self.child = link_names(model)
+        self.body_of_joint = {0: self.root, **self.child}
+        # the link of every BODY frame, its placement in its joint's frame and that joint
+        self.placement: dict[str, pin.SE3] = {self.root: pin.SE3.Identity()}
+        self.joint_of: dict[str, int] = {self.root: 0}
+        for j, link in self.child.items():
+            self.placement[link] = pin.SE3.Identity()
+            self.joint_of[link] = j
+        for f in model.frames:
+            if f.type == pin.FrameType.BODY and f.name not in self.placement:
+                self.placement[f.name] = f.placement
+                self.joint_of[f.name] = f.parentJoint
+
+
+def _own_inertias(model: pin.Model, tree: _Tree) -> tuple[dict[str, np.ndarray], list]:
+    """Each link's own spatial inertia, and the fixed joints (frame, parent, child).
+
+    A link behind a fixed joint keeps its inertia (on the fixed-joint frame); the moving
+    joint's merged inertia gives it back.
+    """
+    frames = model.frames
     own: dict[str, np.ndarray] = {}
     merged = {j: _spatial(model.inertias[j]) for j in range(model.njoints)}
     fixed = []
@@ -175,54 +205,42 @@ def urdf_from_model(model: pin.Model, name: str | None = None) -> str:
         if parent.type != pin.FrameType.BODY or len(kids) != 1:
             continue
         fixed.append((f, parent.name, kids[0]))
-        contribution = _spatial(f.placement.act(f.inertia))
         own[kids[0]] = _spatial(f.inertia)
-        merged[f.parentJoint] = merged[f.parentJoint] - contribution
-    for j, link in body_of_joint.items():
+        merged[f.parentJoint] = merged[f.parentJoint] - _spatial(f.placement.act(f.inertia))
+    for j, link in tree.body_of_joint.items():
         own[link] = merged[j]
-    for link in link_placement:
-        el = ET.SubElement(robot, "link", {"name": link})
-        if link in own:
-            _inertial(el, inertia_from_spatial(own[link]))
-    for j in range(1, model.njoints):
-        jm = model.joints[j]
-        kind, axis = _joint_kind(jm)
-        jframe = [
-            f for f in frames if f.type == pin.FrameType.JOINT and f.name == model.names[j]
-        ]
-        parent_link = body_of_joint[model.parents[j]]
-        if jframe and frames[jframe[0].parentFrame].type == pin.FrameType.BODY:
-            parent_link = frames[jframe[0].parentFrame].name
-        origin = link_placement[parent_link].actInv(model.jointPlacements[j])
-        el = ET.SubElement(robot, "joint", {"name": model.names[j], "type": kind})
-        _origin(el, origin)
-        ET.SubElement(el, "parent", {"link": parent_link})
-        ET.SubElement(el, "child", {"link": child[j]})
-        ET.SubElement(el, "axis", {"xyz": " ".join(_num(v) for v in axis)})
-        lim = {
-            "effort": _num(model.effortLimit[jm.idx_v]),
-            "velocity": _num(model.velocityLimit[jm.idx_v]),
-        }
-        if kind != "continuous":
-            lo, hi = model.lowerPositionLimit[jm.idx_q], model.upperPositionLimit[jm.idx_q]
-            if np.isfinite(lo) and abs(lo) < 1e300:
-                lim["lower"] = _num(lo)
-            if np.isfinite(hi) and abs(hi) < 1e300:
-                lim["upper"] = _num(hi)
-        ET.SubElement(el, "limit", lim)
-    for f, parent, kid in fixed:
-        el = ET.SubElement(robot, "joint", {"name": f.name, "type": "fixed"})
-        _origin(el, link_placement[parent].actInv(f.placement))
-        ET.SubElement(el, "parent", {"link": parent})
-        ET.SubElement(el, "child", {"link": kid})
-    # BODY frames added by hand without a fixed-joint frame: fixed to their joint's link
-    reached = set(body_of_joint.values()) | {kid for _, _, kid in fixed}
-    for link in link_placement:
-        if link in reached:
-            continue
-        parent = body_of_joint[link_joint[link]]
-        el = ET.SubElement(robot, "joint", {"name": f"{link}_fixed", "type": "fixed"})
-        _origin(el, link_placement[link])
-        ET.SubElement(el, "parent", {"link": parent})
-        ET.SubElement(el, "child", {"link": link})
-    return ET.tostring(robot, encoding="unicode")
+    return own, fixed
+
+
+def _joint_element(robot: ET.Element, model: pin.Model, tree: _Tree, j: int) -> None:
+    """The ``<joint>`` of moving joint ``j``: origin, links, axis and limits."""
+    frames = model.frames
+    jm = model.joints[j]
+    kind, axis = _joint_kind(jm)
+    jframe = [f for f in frames if f.type == pin.FrameType.JOINT and f.name == model.names[j]]
+    parent_link = tree.body_of_joint[model.parents[j]]
+    if jframe and frames[jframe[0].parentFrame].type == pin.FrameType.BODY:
+        parent_link = frames[jframe[0].parentFrame].name
+    origin = tree.placement[parent_link].actInv(model.jointPlacements[j])
+    el = ET.SubElement(robot, "joint", {"name": model.names[j], "type": kind})
+    _origin(el, origin)
+    ET.SubElement(el, "parent", {"link": parent_link})
+    ET.SubElement(el, "child", {"link": tree.child[j]})
+    ET.SubElement(el, "axis", {"xyz": " ".join(_num(v) for v in axis)})
+    lim = {
+        "effort": _num(model.effortLimit[jm.idx_v]),
+        "velocity": _num(model.velocityLimit[jm.idx_v]),
+    }
+    if kind != "continuous":
+        for key, value in (("lower", model.lowerPositionLimit[jm.idx_q]),
+                           ("upper", model.upperPositionLimit[jm.idx_q])):
+            if np.isfinite(value) and abs(value) < 1e300:
+                lim[key] = _num(value)
+    ET.SubElement(el, "limit", lim)
+
+
+def _fixed_joint(robot: ET.Element, name: str, parent: str, child: str, origin: pin.SE3) -> None:
+    el = ET.SubElement(robot, "joint", {"name": name, "type": "fixed"})
+    _origin(el, origin)
+    ET.SubElement(el, "parent", {"link": parent})
+    ET.SubElement(el, "child", {"link": child})
