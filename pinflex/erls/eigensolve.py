@@ -215,6 +215,43 @@ def eigvals_one(model, M: np.ndarray, n_modes: int | None = None, pencil=None) -
     return lam
 
 
+def _condense_one(M: np.ndarray, nx: int, nv: int):
+    """``(Bred, Lq, Y)``: the elastic block with the rigid one condensed out, one pose.
+
+    As :func:`condense`, through LAPACK/BLAS directly (one pose: the wrappers' checks cost
+    more than these small factorizations); ``Bred``'s lower triangle only. ``Lq`` (the
+    Cholesky factor of ``Mqq``) and ``Y = Lq⁻¹ Mqw`` are None without rigid coordinates.
+    """
+    blas, lapack = _LINALG or _linalg()
+    Bred = M[:nx, :nx]
+    if not nv:
+        return Bred, None, None
+    Lq, info = lapack.dpotrf(M[nx:, nx:], lower=1, clean=1)
+    if info != 0:
+        raise EigenSolverError(
+            "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
+            "add inertia to the links it drives"
+        )
+    Y, info = lapack.dtrtrs(Lq, M[nx:, :nx], lower=1)
+    return blas.dsyrk(-1.0, Y, beta=1.0, c=Bred, trans=1, lower=1), Lq, Y  # Mww - Y^T Y
+
+
+def _top_eigh(Bred: np.ndarray, nx: int, k: int):
+    """The ``k`` largest eigenpairs of ``Bred`` (lower triangle given), ascending."""
+    if use_lanczos(nx, k):
+        return _lanczos(np.tril(Bred) + np.tril(Bred, -1).T, k, True)
+    if k == nx:
+        mu, V, info = (_LINALG or _linalg())[1].dsyevd(Bred, compute_v=1, lower=1)
+        if info != 0:
+            raise EigenSolverError("the symmetric eigensolver did not converge: the mass of the "
+                                   "model is not finite")
+        return mu, V
+    import scipy.linalg
+
+    return scipy.linalg.eigh(Bred, lower=True, subset_by_index=[nx - k, nx - 1],
+                             driver="evr", check_finite=False)
+
+
 def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
     """Eigenvalues λ (k,) and mass-normalised shapes of one pose.
 
@@ -224,37 +261,14 @@ def eigvecs(model, M: np.ndarray, n_modes: int | None = None, pencil=None):
         :func:`eigvals`) directly over ``[x; q]`` (nd, k - r). The q part is the condensed
         rigid-coordinate response.
     """
-    blas, lapack = _LINALG or _linalg()
+    lapack = (_LINALG or _linalg())[1]
     nx = model.nx
     k = nx if n_modes is None else min(int(n_modes), nx)
     nd = M.shape[-1]
-    # condense as condense() does, through LAPACK/BLAS directly (one pose: the wrappers'
-    # checks cost more than these small factorizations); Bred's lower triangle only
-    Lq = Y = None
-    Bred = M[:nx, :nx]
-    if model.nv:
-        Lq, info = lapack.dpotrf(M[nx:, nx:], lower=1, clean=1)
-        if info != 0:
-            raise EigenSolverError(
-                "the ERLS mass matrix Mqq is singular: a joint moves no mass; "
-                "add inertia to the links it drives"
-            )
-        Y, info = lapack.dtrtrs(Lq, M[nx:, :nx], lower=1)
-        Bred = blas.dsyrk(-1.0, Y, beta=1.0, c=Bred, trans=1, lower=1)  # Mww - Y^T Y
+    Bred, Lq, Y = _condense_one(M, nx, model.nv)
     if k == 0:
         return np.zeros(0), np.zeros((nd, 0)), np.zeros((nd, 0))
-    if use_lanczos(nx, k):
-        mu, V = _lanczos(np.tril(Bred) + np.tril(Bred, -1).T, k, True)
-    elif k == nx:
-        mu, V, info = lapack.dsyevd(Bred, compute_v=1, lower=1)
-        if info != 0:
-            raise EigenSolverError("the symmetric eigensolver did not converge: the mass of the "
-                                   "model is not finite")
-    else:
-        import scipy.linalg
-
-        mu, V = scipy.linalg.eigh(Bred, lower=True, subset_by_index=[nx - k, nx - 1],
-                                  driver="evr", check_finite=False)
+    mu, V = _top_eigh(Bred, nx, k)
     mu, V = mu[::-1], V[:, ::-1]
     if not math.isfinite(mu.sum()):  # a NaN or inf makes the sum one (then checked in full)
         _finite(mu)
