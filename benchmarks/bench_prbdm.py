@@ -315,8 +315,9 @@ def section_fitspeed_study(quick: bool, links: tuple[int, ...] = STUDY_LINKS,
     study = PrbdmStudy(seed=STUDY_SEED, n_beams=max(items) + 1, links=tuple(links),
                        n_starts=STUDY_STARTS)
     beam_cfg, truth_cfg = study.beam_settings(), study.truth_settings()
-    material = Material(beam_cfg["material"]["youngs_modulus_pa"],
-                        beam_cfg["material"]["density_kg_m3"], beam_cfg["material"]["name"])
+    material = Material(E=beam_cfg["material"]["youngs_modulus_pa"],
+                        density=beam_cfg["material"]["density_kg_m3"],
+                        name=beam_cfg["material"]["name"])
     beams, truths, seeds = {}, {}, {}
     for i in items:
         seeds[i] = beam_seed(STUDY_SEED, i)

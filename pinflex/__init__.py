@@ -20,7 +20,7 @@ _EXPORTS = {
     "FlexibleData": "pinflex.erls",
     "FlexibleModel": "pinflex.erls",
     "Mass": "pinflex.native.spec",
-    "Material": "pinflex.native.spec",
+    "Material": "pinflex.materials",
     "ModalResult": "pinflex.erls",
     "PinflexError": "pinflex.exceptions",
     "PinflexWarning": "pinflex.exceptions",
@@ -75,6 +75,7 @@ if TYPE_CHECKING:
     from pinflex.erls import FlexibleData, FlexibleModel, ModalResult
     from pinflex.erls.robots import example_robot
     from pinflex.exceptions import PinflexError, PinflexWarning
-    from pinflex.native.spec import Beam, Mass, Material
+    from pinflex.materials import Material
+    from pinflex.native.spec import Beam, Mass
     from pinflex.parametric import TaylorModel, expand, matrix_jets
     from pinflex.trajectory import Trajectory

@@ -23,7 +23,7 @@ SRC = Path(__file__).resolve().parents[1] / "pinflex"
 #: own layer (without cycles) and the layers below, never above.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("exceptions", "lazy", "resources", "validation", "progress", "outputs", "linalg", "jets",
-     "beam", "sections", "summaries"),
+     "beam", "sections", "materials", "summaries"),
     ("description",),
     ("native", "trajectory"),
     ("erls",),

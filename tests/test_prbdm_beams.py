@@ -6,7 +6,6 @@ import pytest
 from pinflex.exceptions import InvalidBeam, InvalidBeamProperty
 from pinflex.prbdm.beams import (
     STEEL,
-    Material,
     Planform,
     chain_segments,
     equivalent_bending_stiffness,
@@ -129,18 +128,6 @@ def test_non_finite_width_raises():
     """A NaN half-width raises InvalidBeam."""
     with pytest.raises(InvalidBeam, match="finite"):
         Planform(np.array([0.0, 1.0]), np.array([0.1, np.nan]), 0.01)
-
-
-def test_non_positive_modulus_raises():
-    """A material with non-positive Young's modulus raises InvalidBeam."""
-    with pytest.raises(InvalidBeam, match="youngs_modulus_pa"):
-        Material(youngs_modulus_pa=0.0, density_kg_m3=7850.0)
-
-
-def test_non_positive_density_raises():
-    """A material with negative density raises InvalidBeam."""
-    with pytest.raises(InvalidBeam, match="density"):
-        Material(youngs_modulus_pa=205e9, density_kg_m3=-1.0)
 
 
 def test_negative_section_count_raises():

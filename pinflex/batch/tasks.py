@@ -194,8 +194,9 @@ def run_prbdm_beam(study: dict, seed: int, item: int,
     stage = "beam"
     try:
         t0 = time.perf_counter()
-        material = Material(beam["material"]["youngs_modulus_pa"],
-                            beam["material"]["density_kg_m3"], beam["material"]["name"])
+        material = Material(E=beam["material"]["youngs_modulus_pa"],
+                            density=beam["material"]["density_kg_m3"],
+                            name=beam["material"]["name"])
         planform = random_beam(bseed, n_sections=beam["n_sections"], length_m=beam["length_m"],
                                max_half_width_m=beam["max_half_width_m"],
                                thickness_m=beam["thickness_m"], material=material)

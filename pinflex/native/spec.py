@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pinflex.beam import Section
 from pinflex.description.types import NAMESPACE
 from pinflex.exceptions import InvalidBeamProperty, InvalidDescription
+from pinflex.materials import Material
 
 _NS = "{" + NAMESPACE + "}"
 
@@ -43,51 +44,6 @@ def _vec(values: Sequence[float], what: str) -> str:
     if len(vals) != 3:
         raise InvalidDescription(f"{what}: expected three numbers, got {values!r}")
     return " ".join(_num(v) for v in vals)
-
-
-@dataclass(frozen=True)
-class Material:
-    """Isotropic beam material.
-
-    Args:
-        E: Young's modulus [Pa].
-        G: Shear modulus [Pa]; default ``E / (2 (1 + poisson))``.
-        poisson: Poisson's ratio, used only when ``G`` is not given.
-        density: Volumetric mass density [kg/m^3]; give it or ``linear_density``.
-        linear_density: Mass per unit length [kg/m]; give it or ``density``.
-    """
-
-    E: float
-    G: float | None = None
-    poisson: float = 0.3
-    density: float | None = None
-    linear_density: float | None = None
-
-    def __post_init__(self):
-        if (self.density is None) == (self.linear_density is None):
-            raise InvalidBeamProperty(
-                "Material: give exactly one of density [kg/m^3] or linear_density [kg/m]"
-            )
-
-    def attributes(self) -> dict[str, str]:
-        """The ``<pinflex:material>`` attributes."""
-        out = {"E": _num(self.E)}
-        if self.G is not None:
-            out["G"] = _num(self.G)
-        else:
-            out["poisson"] = _num(self.poisson)
-        if self.density is not None:
-            out["density"] = _num(self.density)
-        elif self.linear_density is not None:
-            out["linear_density"] = _num(self.linear_density)
-        return out
-
-
-ALUMINIUM = Material(E=70e9, G=26.3e9, density=2700.0)
-"""A typical aluminium alloy (E = 70 GPa, G = 26.3 GPa, 2700 kg/m^3)."""
-
-STEEL = Material(E=210e9, G=81e9, density=7850.0)
-"""A typical structural steel (E = 210 GPa, G = 81 GPa, 7850 kg/m^3)."""
 
 
 @dataclass(frozen=True)

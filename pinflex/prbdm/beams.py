@@ -26,6 +26,7 @@ from functools import cached_property
 import numpy as np
 
 from pinflex.linalg import readonly as _readonly
+from pinflex.materials import Material
 
 from ..exceptions import InvalidBeam
 
@@ -34,31 +35,9 @@ _GAUSS3_UNIT = 0.5 * (_GAUSS3_X + 1.0)      # nodes on [0, 1]
 _GAUSS3_HALF_W = 0.5 * _GAUSS3_W            # weights on [0, 1]
 
 
-@dataclass(frozen=True)
-class Material:
-    """Linear elastic isotropic material.
-
-    Attributes:
-        youngs_modulus_pa: Young's modulus E [Pa].
-        density_kg_m3: Mass density rho [kg/m^3].
-        name: Label used in reports.
-    """
-
-    youngs_modulus_pa: float
-    density_kg_m3: float
-    name: str = ""
-
-    def __post_init__(self) -> None:
-        for label, value in (("youngs_modulus_pa", self.youngs_modulus_pa),
-                             ("density_kg_m3", self.density_kg_m3)):
-            if not np.isfinite(value) or value <= 0.0:
-                raise InvalidBeam(
-                    f"material {label} = {value!r} must be a finite positive number; "
-                    "steel is E = 205e9 Pa, rho = 7850 kg/m^3"
-                )
-
-
-STEEL = Material(youngs_modulus_pa=205e9, density_kg_m3=7850.0, name="steel")
+STEEL = Material(E=205e9, density=7850.0, name="steel")
+"""Paper 001's steel (E = 205 GPa, 7850 kg/m^3): the PRBDM default; its G is not used (the
+planform bends out of plane only)."""
 
 
 
@@ -92,6 +71,10 @@ class Planform:
         x = np.asarray(self.x_m, dtype=float)
         y = np.asarray(self.half_width_m, dtype=float)
         _validate_planform(x, y, self.thickness_m)
+        if not isinstance(self.material, Material) or self.material.density is None:
+            raise InvalidBeam(
+                "material must be a pinflex.Material with a volumetric density [kg/m^3] (the "
+                f"planform's mass follows its width), got {self.material!r}")
         object.__setattr__(self, "x_m", _readonly(x))
         object.__setattr__(self, "half_width_m", _readonly(y))
         if self.thickness_profile_m is not None:
