@@ -2,7 +2,11 @@
 
 * :mod:`~pinflex.dynamics.terms`: the terms ``M, C, K, F`` of eq. (1) at a state;
 * :mod:`~pinflex.dynamics.motion`: joint motion through trajectory samples;
-* :mod:`~pinflex.dynamics.simulate`: prescribed joint motion and torque drive, integrators;
+* :mod:`~pinflex.dynamics.prescribed`: prescribed joint motion (kineto-elastodynamics);
+* :mod:`~pinflex.dynamics.torque`: torque drive (forward dynamics under motor torques);
+* :mod:`~pinflex.dynamics.integrators`: generalized-α and ``scipy`` integrators, exact holds;
+* :mod:`~pinflex.dynamics.damping`: one damping definition for simulation, FRF and export;
+* :mod:`~pinflex.dynamics.frf`: receptances at a pose;
 * :mod:`~pinflex.dynamics.response`: a frame's deflection, peak, RMS, residual vibration.
 """
 

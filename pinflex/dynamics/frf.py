@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from pinflex.dynamics.simulate import Damping
+from pinflex.dynamics.damping import Damping
 from pinflex.exceptions import ConfigurationError
 
 

@@ -34,7 +34,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pinflex.dynamics.simulate import Damping
+from pinflex.dynamics.damping import Damping
 from pinflex.exceptions import ConfigurationError
 
 
@@ -181,9 +181,10 @@ def load_simulation_study(path: str | Path):
 
 def simulate_design(model, trajectory, y, settings: SimulationSettings, name: str):
     """Simulate one design of a study; returns ``(report, simulation, dynamics)``."""
+    from pinflex.dynamics.prescribed import simulate_prescribed
     from pinflex.dynamics.response import vibration_report
-    from pinflex.dynamics.simulate import simulate_prescribed, simulate_torque
     from pinflex.dynamics.terms import ErlsDynamics
+    from pinflex.dynamics.torque import simulate_torque
 
     model.description.require_link(settings.frame)
     dyn = ErlsDynamics(model, y=y, gravity=list(settings.gravity))
