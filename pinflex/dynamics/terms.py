@@ -112,10 +112,12 @@ class ErlsDynamics:
             DesignVariableNotFound: A dict key of ``y`` is not a design variable.
             DesignVariableOutOfBounds: A design value leaves its bounds.
         """
-        self.model = model
-        self.y = model.check_y(y)
-        if self.y.ndim != 1:
+        y = model.check_y(y)
+        if y.ndim != 1:
             raise ConfigurationError("ErlsDynamics takes one design vector (ny,)")
+        #: the model at design ``y`` (sections, materials, springs and masses from ``y``)
+        self.model = model = design_model(model, y)
+        self.y = y
         g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ConfigurationError(f"gravity must be 3 finite numbers [m/s²], got {gravity!r}")
@@ -155,13 +157,13 @@ class ErlsDynamics:
         Jd = {link: np.zeros((self.nv, 6, self.nv)) for link in self._links}
         for link in self._links:
             fid = model.plan.frame_ids[link]
-            J[link] = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ Cm
+            J[link] = _jac(pin.getFrameJacobian(pm, pd, fid, pin.LOCAL), self.nv) @ Cm
             R[link] = pd.oMf[fid].rotation.copy()
         for k in range(self.nv):
             pin.computeJointJacobiansTimeVariation(pm, pd, qp, Cm[:, k].copy())
             for link in self._links:
-                Jd[link][k] = pin.getFrameJacobianTimeVariation(
-                    pm, pd, model.plan.frame_ids[link], pin.LOCAL) @ Cm
+                Jd[link][k] = _jac(pin.getFrameJacobianTimeVariation(
+                    pm, pd, model.plan.frame_ids[link], pin.LOCAL), self.nv) @ Cm
         e, ed = self._root_twists(q)
         return J, Jd, R, e, ed
 
@@ -357,7 +359,7 @@ class ErlsDynamics:
             pin.computeJointJacobians(pm, pd, model.pin_configuration(q))
             pin.updateFramePlacements(pm, pd)
             Rw = rotate_twist(pd.oMf[fid].rotation)
-            JL = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ model.coord_map
+            JL = _jac(pin.getFrameJacobian(pm, pd, fid, pin.LOCAL), model.nv) @ model.coord_map
             el = self._root_twists(q)[0].get(link)
             T = np.zeros((6, model.nx)) if att.const is None else att.const.copy()
             if att.lin is not None and el is not None:
@@ -365,6 +367,43 @@ class ErlsDynamics:
             return Rw @ T, Rw @ (Xp @ JL)
 
         return at
+
+
+def design_model(model, y: np.ndarray):
+    """The model whose properties are those of design ``y`` (``model`` itself at its nominal).
+
+    Every property a design parameter sets (section dimensions, material constants, joint
+    spring stiffnesses, point masses referencing a parameter) is read from a model built at
+    ``y``, through the same description route as :meth:`FlexibleModel.matrices`, so the
+    dynamics and the modal analysis of one design agree. Design point masses are read from
+    ``y`` by the carriers.
+
+    Args:
+        model: The :class:`~pinflex.FlexibleModel`.
+        y: Design values (ny,), checked.
+
+    Returns:
+        ``model`` when no design parameter leaves its nominal value, else a model at ``y``.
+    """
+    params = {d.name: float(v) for d, v in zip(model.design, y)
+              if d.kind == "parameter" and float(v) != float(d.nominal)}
+    if not params:
+        return model
+    with_values = getattr(model, "with_values", None)
+    if with_values is not None:
+        return with_values(params)
+    from pinflex.erls import FlexibleModel
+
+    desc = model.description
+    referenced = {p.name for p in desc.point_masses if p.mass_ref is not None}
+    masses = {n: v for n, v in model.point_mass_values.items() if n not in referenced}
+    if getattr(model, "_spring_refs", None):
+        joints: object = "annotated"
+    else:
+        joints = {c.name: (c.kind if c.kind != "spring" else c.stiffness)
+                  for c in model.joint_conditions}
+    return FlexibleModel(desc.with_values(params), planar=model.planar,
+                         coordinates=model.coordinates, joints=joints, values=masses)
 
 
 def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
@@ -403,6 +442,11 @@ def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
     return tw, rate
 
 
+def _jac(J, nv: int) -> np.ndarray:
+    """A Pinocchio frame Jacobian as (6, nv): for one joint Pinocchio returns a (6,) vector."""
+    return np.asarray(J).reshape(6, nv)
+
+
 # ---------------------------------------------------------------------- set-up
 def _xmap(c: np.ndarray) -> np.ndarray:
     out = np.zeros(c.shape[:-1] + (3, 6))
@@ -414,7 +458,6 @@ def _xmap(c: np.ndarray) -> np.ndarray:
 def _build_carriers(model, y: np.ndarray):
     desc = model.description
     nx = model.nx
-    design_index = {d.name: i for i, d in enumerate(model.design)}
     points: list[_Carriers] = []
     rotors: list[_Carriers] = []
     for link, plan in model.plan.beams.items():
@@ -453,7 +496,7 @@ def _build_carriers(model, y: np.ndarray):
                                 -np.ones(m.size, dtype=int)))
     for pm in model.plan.point_masses:
         name, link, xyz, att = pm.name, pm.link, pm.xyz, pm.attach
-        d = design_index.get(name, -1)
+        d = model._mass_design_index.get(name, -1)
         mass = y[d] if d >= 0 else model.point_mass_values[name]
         C = np.zeros((1, 3, nx)) if att.const is None else att.const[None, :3]
         D = None if att.lin is None else att.lin[None, :3]
