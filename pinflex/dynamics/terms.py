@@ -389,21 +389,7 @@ def design_model(model, y: np.ndarray):
               if d.kind == "parameter" and float(v) != float(d.nominal)}
     if not params:
         return model
-    with_values = getattr(model, "with_values", None)
-    if with_values is not None:
-        return with_values(params)
-    from pinflex.erls import FlexibleModel
-
-    desc = model.description
-    referenced = {p.name for p in desc.point_masses if p.mass_ref is not None}
-    masses = {n: v for n, v in model.point_mass_values.items() if n not in referenced}
-    if getattr(model, "_spring_refs", None):
-        joints: object = "annotated"
-    else:
-        joints = {c.name: (c.kind if c.kind != "spring" else c.stiffness)
-                  for c in model.joint_conditions}
-    return FlexibleModel(desc.with_values(params), planar=model.planar,
-                         coordinates=model.coordinates, joints=joints, values=masses)
+    return model.with_values(params)
 
 
 def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
@@ -496,7 +482,7 @@ def _build_carriers(model, y: np.ndarray):
                                 -np.ones(m.size, dtype=int)))
     for pm in model.plan.point_masses:
         name, link, xyz, att = pm.name, pm.link, pm.xyz, pm.attach
-        d = model._mass_design_index.get(name, -1)
+        d = model.plan.design.mass_index.get(name, -1)
         mass = y[d] if d >= 0 else model.point_mass_values[name]
         C = np.zeros((1, 3, nx)) if att.const is None else att.const[None, :3]
         D = None if att.lin is None else att.lin[None, :3]
