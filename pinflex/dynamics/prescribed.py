@@ -72,6 +72,31 @@ class _Coefficients:
 
 
 
+def check_locked_motion(model, trajectory) -> None:
+    """Refuse a trajectory that turns a locked joint (a prescribed joint that does not move).
+
+    Args:
+        model: The :class:`~pinflex.FlexibleModel`.
+        trajectory: Joint samples (``.q`` (n, nv), user convention).
+
+    Raises:
+        ConfigurationError: A locked joint's physical angle (or position) changes along the
+            trajectory; the message names the joint and its span.
+    """
+    locked = [c.name for c in model.joint_conditions if c.kind == "locked"]
+    if not locked:
+        return
+    Qp = np.asarray(trajectory.q, dtype=float) @ model.coord_map.T
+    for name in locked:
+        col = model.joint_index(name)
+        span = float(np.ptp(Qp[:, col]))
+        if span > 1e-9 * max(1.0, float(np.abs(Qp[:, col]).max())):
+            raise ConfigurationError(
+                f"joint '{name}' is locked but the trajectory turns it by {span:.3g} (rad "
+                "or m): hold it constant in the trajectory, or do not lock it (joints='free'"
+                " or a spring stiffness)")
+
+
 class PrescribedSystem:
     """The locked-joint linear system of a prescribed motion (see module doc).
 
@@ -319,16 +344,7 @@ def simulate_prescribed(
     """
     motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
     check_positive(after_s=after_s, sample_hz=sample_hz, rtol=rtol, atol=atol)
-    if dyn.locked:
-        # a locked joint is a prescribed joint that does not move: the drive holds it
-        Qp = np.asarray(motion.trajectory.q, dtype=float) @ dyn.model.coord_map.T
-        for name, col in dyn.locked:
-            span = float(np.ptp(Qp[:, col]))
-            if span > 1e-9 * max(1.0, float(np.abs(Qp[:, col]).max())):
-                raise ConfigurationError(
-                    f"joint '{name}' is locked but the trajectory turns it by {span:.3g} (rad "
-                    "or m): hold it constant in the trajectory, or do not lock it (joints='free'"
-                    " or a spring stiffness)")
+    check_locked_motion(dyn.model, motion.trajectory)
     if start not in ("static", "rest"):
         raise ConfigurationError(f"start = {start!r} must be 'static' or 'rest'")
     if dyn.nx == 0:

@@ -23,8 +23,9 @@ Example (all keys optional; the defaults shown)::
     kp = 0.0                    # torque drive: PD gains on the motor angles [N m/rad]
     kd = 0.0                    #               [N m s/rad]
 
-The study simulates the baseline design (``[options] baseline``, default the lower bounds) and
-the design the assignment finds.
+With ``[[targets]]``, the study simulates the baseline design (``[options] baseline``, default
+the lower bounds) and the design the assignment finds; without them, the model at its values
+(``values``), with no assignment.
 """
 
 from __future__ import annotations
@@ -164,8 +165,14 @@ def parse_simulation_table(table) -> SimulationSettings:
     return SimulationSettings(**out)
 
 
-def load_simulation_study(path: str | Path):
-    """``(assignment config, simulation settings)`` of a study file."""
+def load_simulation_study(path: str | Path, overrides: dict | None = None):
+    """``(assignment config, simulation settings)`` of a study file.
+
+    Args:
+        path: Study TOML.
+        overrides: ``[simulation]`` keys replacing the file's (command-line options), checked
+            with them.
+    """
     from pinflex.assignment.study import load_config
 
     path = Path(path)
@@ -175,8 +182,33 @@ def load_simulation_study(path: str | Path):
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ConfigurationError(f"'{path}' is not valid TOML: {exc}") from exc
-    settings = parse_simulation_table(data.get("simulation"))
+    table = data.get("simulation")
+    if overrides:
+        table = {**(table if isinstance(table, dict) else {}), **overrides}
+    settings = parse_simulation_table(table)
     return load_config(path), settings
+
+
+def check_drive(model, trajectory, settings: SimulationSettings) -> None:
+    """What the drive refuses, checked before any work (the assignment of a study).
+
+    Raises:
+        ConfigurationError: The prescribed drive turns a locked joint, the torque drive meets
+            a locked joint, or the output frame is not a link of the robot.
+    """
+    from pinflex.dynamics.prescribed import check_locked_motion
+
+    model.description.require_link(settings.frame)
+    if settings.drive == "prescribed":
+        check_locked_motion(model, trajectory)
+        return
+    locked = [c.name for c in model.joint_conditions if c.kind == "locked"]
+    if locked:
+        raise ConfigurationError(
+            f"drive = 'torque' integrates every joint coordinate; joints {locked} are locked in "
+            "this model: model a brake as a stiff spring (joints={name: stiffness}), or hold "
+            "the joints with the prescribed drive (drive = 'prescribed', the trajectory "
+            "constant in them)")
 
 
 def simulate_design(model, trajectory, y, settings: SimulationSettings, name: str):
