@@ -1,5 +1,7 @@
-"""`pinflex simulate` for every arm: a plain motion without a study, studies without targets,
-locked joints with --out, refusals before the assignment runs.
+"""`pinflex simulate` for every arm: plain motions, studies without targets, locked joints.
+
+A plain motion without a study, studies without targets, locked joints with --out, refusals
+before the assignment runs.
 
 Reference: the global planar frame FE of benchmark A (tests/reference_fe.py, no pinflex code).
 """
@@ -10,7 +12,6 @@ import json
 
 import numpy as np
 import pytest
-
 import reference_fe as ref
 
 Q = (1.8, 5.3)  # absolute link angles of benchmark A (the file's user convention)
@@ -21,7 +22,8 @@ def _csv(path, q_of_s, T=0.05, n=11):
     s = t / T
     h = 10 * s**3 - 15 * s**4 + 6 * s**5
     q = np.array([q_of_s(v) for v in h])
-    path.write_text("t,q1,q2\n" + "\n".join(f"{float(a)!r},{float(b)!r},{float(c)!r}" for a, (b, c) in zip(t, q)))
+    rows = (f"{float(a)!r},{float(b)!r},{float(c)!r}" for a, (b, c) in zip(t, q))
+    path.write_text("t,q1,q2\n" + "\n".join(rows))
     return path
 
 
@@ -134,8 +136,10 @@ def test_locked_joint_with_out_writes_the_playback(tmp_path, capsys):
 
 
 def test_locked_joints_are_refused_before_the_assignment(tmp_path, capsys, monkeypatch):
-    """joints = "locked" with a moving trajectory, and the torque drive with a lock: refused
-    with exit status 2 before the assignment starts."""
+    """Locked joints the drive refuses stop the command (status 2) before the assignment.
+
+    ``joints = "locked"`` with a moving trajectory, and the torque drive with a lock.
+    """
     import pinflex.assignment.study as study_mod
     from pinflex.cli import main
 
