@@ -53,6 +53,12 @@ def add_parser(sub) -> None:
                    help="output point on the frame's link [m]")
     g.add_argument("--sample-hz", type=float, default=None, metavar="HZ",
                    help="output rate [Hz] (default 5000)")
+    g.add_argument("--terms", choices=("eq1", "full"), default=None,
+                   help="prescribed drive: eq1 (paper 000 eq. 1, default) or full (adds the "
+                   "centrifugal, Euler and geometric-stiffness terms of a fast motion)")
+    g.add_argument("--strict", action="store_true", default=None,
+                   help="refuse a motion too fast for eq. (1) (validity indicator above its "
+                   "threshold) instead of warning")
     add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_simulate)
 
@@ -61,7 +67,7 @@ def simulation_overrides(args: argparse.Namespace) -> dict:
     """The ``[simulation]`` keys given on the command line (checked with the study's)."""
     out: dict[str, Any] = {}
     for key, name in (("drive", "drive"), ("after_s", "after"), ("frame", "frame"),
-                      ("sample_hz", "sample_hz")):
+                      ("sample_hz", "sample_hz"), ("terms", "terms"), ("strict", "strict")):
         if getattr(args, name, None) is not None:
             out[key] = getattr(args, name)
     for key in ("gravity", "point"):
@@ -164,10 +170,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         out = output_dir(args.out)
         files.append(str(deflection_chart(reports, out / "tip_deflection.png")))
-        for rep in reports:
+        for rep, (sim, _) in zip(reports, sims):
             p = out / f"{rep.name}_series.json"
             write_text(p, rep.to_json(series=True), "simulation JSON")
             files.append(str(p))
+            if sim.validity is not None:
+                files.append(str(sim.validity.write_csv(out / f"{rep.name}_validity.csv")))
         if args.exaggeration > 0:
             playback: Any = None
             try:
@@ -190,6 +198,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             "step_error_estimate": d.get("error_estimate"),
             "residual_joint_condition": d["joint_condition"],
             "residual_reference_hz": d["reference_hz"], "frame": d["frame"],
+            "terms": d.get("terms", "eq1"), "validity": d.get("validity"),
         })
     out_json = {"drive": settings.drive, "designs": designs, "files": files,
                 "total_time_s": total}
@@ -205,6 +214,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
           f"{1e3 * d['tip_rms_m']:.4f} mm, residual {1e3 * d['residual_amplitude_m']:.4f} mm at "
           f"{'-' if f is None else f'{f:.3f}'} Hz (reference "
           f"{d['residual_reference_hz'][0]:.3f} Hz); {d['steps']} steps, {d['time_s']:.2f} s\n")
+        v = d["validity"]
+        if v is not None:
+            w(f"            validity of eq. (1): |omega|^2/omega_1^2 = {v['max_speed_ratio']:.3g}"
+              f", |alpha|/omega_1^2 = {v['max_accel_ratio']:.3g} (threshold "
+              f"{v['threshold']:g}{'; EXCEEDED' if v['exceeded'] else ''}); terms "
+              f"{d['terms']}\n")
     for f in files:
         w(f"wrote {f}\n")
     return 0

@@ -55,7 +55,9 @@ from pinflex.dynamics.integrators import (
 )
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, SimulationError, check_positive, output_times
+from pinflex.dynamics.speed import check_terms, speed_stiffness
 from pinflex.dynamics.terms import ErlsDynamics
+from pinflex.erls.validity import VALIDITY_THRESHOLD, Validity
 from pinflex.exceptions import ConfigurationError
 
 
@@ -97,6 +99,45 @@ def check_locked_motion(model, trajectory) -> None:
                 " or a spring stiffness)")
 
 
+def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
+                        force=0.0) -> _Coefficients:
+    """The locked-joint system (undamped) of the elastic motion on a rigid state.
+
+    ``Zᵀ M Z ẍ + C_L ẋ + Zᵀ K Z x = Zᵀ (F − M [0; q̈] − C(q̇) [0; q̇])`` of the module doc,
+    with ``K_s`` (:func:`pinflex.dynamics.speed.speed_stiffness`) added to ``K`` for
+    ``terms="full"``.
+
+    Args:
+        dyn: Equations of motion.
+        q: Physical joint coordinates (nv,) [rad or m]; ``qd``, ``qdd`` their rates.
+        qd: Joint velocities (nv,).
+        qdd: Joint accelerations (nv,).
+        terms: ``"eq1"`` or ``"full"``.
+        force: Generalized external force (ndof,) or 0.
+
+    Returns:
+        :class:`_Coefficients` (``full`` holds ``(M, Ck, K, F)`` over every coordinate, ``K``
+        with ``K_s`` and ``F`` with the external force).
+    """
+    nx, nv = dyn.nx, dyn.nv
+    q, qd, qdd = (np.asarray(v, dtype=float) for v in (q, qd, qdd))
+    M, Ck, K, F = dyn.linear_terms(q)
+    if terms == "full":
+        K = K + speed_stiffness(dyn, q, qd, qdd)
+    A, Adk = dyn.joint_offsets(q)
+    Z = np.vstack([np.eye(nx), A])
+    C = np.tensordot(qd, Ck, axes=(0, 0))
+    zq = np.concatenate([np.zeros(nx), qd])
+    Cq = np.stack([Ck[k] @ zq for k in range(nv)], axis=1) if nv else np.zeros((dyn.ndof, 0))
+    Ad = np.tensordot(qd, Adk, axes=(0, 0)) if nv else np.zeros((0, nx))
+    ML = Z.T @ M @ Z
+    CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
+    KL = Z.T @ K @ Z
+    rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
+    F = F + force
+    return _Coefficients(ML, CL, KL, Z.T @ (F - rigid), A, (M, Ck, K, F))
+
+
 class PrescribedSystem:
     """The locked-joint linear system of a prescribed motion (see module doc).
 
@@ -104,11 +145,14 @@ class PrescribedSystem:
         dyn: Equations of motion.
         motion: The joint motion.
         damping: Damping of the elastic motion.
+        forces: External forces ``[(link, xyz, fn), ...]`` (see :func:`simulate_prescribed`).
+        terms: ``"eq1"`` (paper 000 eq. 1) or ``"full"`` (:mod:`pinflex.dynamics.speed`).
     """
 
     def __init__(self, dyn: ErlsDynamics, motion: JointMotion, damping: Damping | None = None,
-                 forces=()):
+                 forces=(), terms: str = "eq1"):
         self.dyn = dyn
+        self.terms = check_terms(terms)
         self.forces = [(dyn.frame_map(link, xyz), fn) for link, xyz, fn in forces]
         self.motion = motion
         self.damping = damping or Damping()
@@ -131,25 +175,12 @@ class PrescribedSystem:
         return out
 
     def _coefficients(self, t: float, damped: bool) -> _Coefficients:
-        dyn, nx = self.dyn, self.nx
         q, qd, qdd = self.motion(t)
-        M, Ck, K, F = dyn.linear_terms(q)
-        A, Adk = dyn.joint_offsets(q)
-        Z = np.vstack([np.eye(nx), A])
-        C = np.tensordot(qd, Ck, axes=(0, 0))
-        zq = np.concatenate([np.zeros(nx), qd])
-        Cq = np.stack([Ck[k] @ zq for k in range(self.nv)], axis=1) if self.nv else \
-            np.zeros((dyn.ndof, 0))
-        Ad = np.tensordot(qd, Adk, axes=(0, 0)) if self.nv else np.zeros((0, nx))
-        ML = Z.T @ M @ Z
-        CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
-        KL = Z.T @ K @ Z
-        rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
-        F = F + external_forces(self.forces, q, t)
-        fL = Z.T @ (F - rigid)
+        out = locked_coefficients(self.dyn, q, qd, qdd, terms=self.terms,
+                                  force=external_forces(self.forces, q, t))
         if damped:
-            CL = CL + self._damping(M, K, ML, KL)
-        return _Coefficients(ML, CL, KL, fL, A, (M, Ck, K, F))
+            out.C = out.C + self._damping(out.full[0], out.full[2], out.M, out.K)
+        return out
 
     def torque(self, t: float, y: np.ndarray, xdd: np.ndarray | None = None) -> np.ndarray:
         """Motor torques (Pinocchio convention) at time ``t``, state ``y = [x; ẋ]``.
@@ -296,6 +327,9 @@ def simulate_prescribed(
     forces=(),
     tol: float | None = None,
     steps: int | None = None,
+    terms: str = "eq1",
+    strict: bool = False,
+    validity_threshold: float = VALIDITY_THRESHOLD,
 ) -> Simulation:
     """Kineto-elastodynamics: the joints follow ``trajectory``, the elastic coordinates respond.
 
@@ -338,6 +372,14 @@ def simulate_prescribed(
             is at most ``tol``; reported as ``Simulation.error_estimate``. ``None``: one pair.
         steps: ``"fixed"`` only: steps ``N`` of the coarser run over the motion (default
             ``duration × sample_hz / 2``, at least 8).
+        terms: ``"eq1"`` (default, paper 000 eq. 1) or ``"full"``: adds the centrifugal and
+            Euler terms of the elastic displacement and the geometric stiffness of the axial
+            inertial and gravity loads (:mod:`pinflex.dynamics.speed`).
+        strict: Refuse (:class:`~pinflex.exceptions.ModelValidityError`, before the
+            integration) a motion whose validity indicator exceeds ``validity_threshold``
+            with ``terms="eq1"``; otherwise such a motion is warned about
+            (:class:`~pinflex.exceptions.ModelValidityWarning`).
+        validity_threshold: Threshold of the indicator (:mod:`pinflex.erls.validity`).
 
     The hold phase after the stop is a constant-coefficient system, propagated exactly by its
     modes at the output rate (:func:`.modal_hold`); its ``steps`` are the output samples.
@@ -356,7 +398,9 @@ def simulate_prescribed(
     if tol is not None and not (np.isfinite(tol) and 0.0 < tol < 1.0):
         raise ConfigurationError(f"tol = {tol!r} must lie in (0, 1)")
     tic = time.perf_counter()
-    system: Any = PrescribedSystem(dyn, motion, damping, forces)
+    indicator = motion_validity(dyn, motion, terms=check_terms(terms), strict=strict,
+                                threshold=validity_threshold)
+    system: Any = PrescribedSystem(dyn, motion, damping, forces, terms)
     if modes is not None:
         system = _ReducedSystem(system, int(modes), int(basis_poses))
     nx = system.nx
@@ -481,6 +525,26 @@ def simulate_prescribed(
         times_s=times, x=x, xd=xd, q=q, qd=qd, q_physical=q_phys, stop_s=motion.t1,
         drive="prescribed", joint_condition="locked", torque_times_s=t_tau, torques=tau,
         steps=run1.steps + int(hold.sum()), nfev=run1.nfev, time_s=elapsed, method=method,
-        error_estimate=estimate, observed_order=order,
+        error_estimate=estimate, observed_order=order, validity=indicator, terms=terms,
     )
 
+
+def motion_validity(dyn: ErlsDynamics, motion: JointMotion, *, terms: str = "eq1",
+                    strict: bool = False, threshold: float = VALIDITY_THRESHOLD,
+                    n_modes: int = 3, times=None) -> Validity:
+    """The validity indicator of eq. (1) along a joint motion, against the locked modes.
+
+    At the trajectory samples (or ``times``) with the motion's exact rates
+    (:func:`pinflex.dynamics.response.locked_validity`). With ``terms="full"`` the indicator
+    is reported but not warned about (the left-out terms are in).
+
+    Raises:
+        ModelValidityError: ``strict`` with ``terms="eq1"`` and the indicator above
+            ``threshold``.
+    """
+    from pinflex.dynamics.response import locked_validity
+
+    t = np.asarray(motion.trajectory.times_s if times is None else times, dtype=float)
+    q, qd, qdd = motion.sample(t)
+    return locked_validity(dyn, t, q, qd, qdd, terms=terms, strict=strict,
+                           threshold=threshold, n_modes=n_modes, what="the prescribed motion")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -36,6 +37,9 @@ class Simulation:
         error_estimate: ``"fixed"`` integrator: Richardson estimate of the time-step error
             (:class:`RichardsonRun`), relative to the largest elastic coordinate; NaN otherwise.
         observed_order: ``"fixed"`` with a ``tol`` ladder: observed order of the step error.
+        validity: The validity indicator of eq. (1) along the motion
+            (:class:`~pinflex.erls.validity.Validity`), or None.
+        terms: ``"eq1"`` or ``"full"`` (:mod:`pinflex.dynamics.speed`).
     """
 
     times_s: np.ndarray
@@ -56,6 +60,8 @@ class Simulation:
     servo_stiffness: float = 0.0
     error_estimate: float = float("nan")
     observed_order: float = float("nan")
+    validity: Any = None
+    terms: str = "eq1"
 
 
 def output_times(t0: float, t1: float, sample_hz: float) -> np.ndarray:

@@ -22,6 +22,11 @@ Example (all keys optional; the defaults shown)::
                                 # of step_s and step_s / 2, Richardson-extrapolated
     kp = 0.0                    # torque drive: PD gains on the motor angles [N m/rad]
     kd = 0.0                    #               [N m s/rad]
+    terms = "eq1"               # prescribed drive: or "full" (centrifugal, Euler and
+                                # geometric-stiffness terms; pinflex.dynamics.speed)
+    strict = false              # refuse a motion too fast for eq. (1) (validity indicator
+                                # above validity_threshold) instead of warning
+    validity_threshold = 0.1    # pinflex.erls.validity
 
 With ``[[targets]]``, the study simulates the baseline design (``[options] baseline``, default
 the lower bounds) and the design the assignment finds; without them, the model at its values
@@ -65,6 +70,9 @@ class SimulationSettings:
     step_s: float | None = None
     kp: float = 0.0
     kd: float = 0.0
+    terms: str = "eq1"
+    strict: bool = False
+    validity_threshold: float = 0.1
 
 
 _NUMBERS = {  # key: (lower, upper, lower inclusive)
@@ -77,6 +85,7 @@ _NUMBERS = {  # key: (lower, upper, lower inclusive)
     "step_s": (0.0, math.inf, True),
     "kp": (0.0, math.inf, True),
     "kd": (0.0, math.inf, True),
+    "validity_threshold": (0.0, math.inf, False),
 }
 
 
@@ -95,7 +104,7 @@ def parse_simulation_table(table) -> SimulationSettings:
     if not isinstance(table, dict):
         raise InvalidSimulationTable([f"must be a table, got {type(table).__name__}"])
     problems: list[str] = []
-    known = {"drive", "damping", "gravity", "frame", "point", *_NUMBERS}
+    known = {"drive", "damping", "gravity", "frame", "point", "terms", "strict", *_NUMBERS}
     for k in sorted(set(table) - known):
         problems.append(f"unknown key '{k}' (known: {', '.join(sorted(known))})")
     out: dict = {}
@@ -114,6 +123,16 @@ def parse_simulation_table(table) -> SimulationSettings:
             problems.append(f"{k} = {v!r} must lie in {'[' if inclusive else '('}{lo:g}, {hi:g}]")
         else:
             out[k] = float(v)
+    if "terms" in table:
+        if table["terms"] not in ("eq1", "full"):
+            problems.append(f"terms = {table['terms']!r} must be 'eq1' or 'full'")
+        else:
+            out["terms"] = table["terms"]
+    if "strict" in table:
+        if not isinstance(table["strict"], bool):
+            problems.append(f"strict = {table['strict']!r} must be true or false")
+        else:
+            out["strict"] = table["strict"]
     for k in ("gravity", "point"):
         if k in table:
             v = table[k]
@@ -157,6 +176,9 @@ def parse_simulation_table(table) -> SimulationSettings:
                                          float(d.get("beta", 0.0)), tuple(map(float, ratios)))
         else:
             problems.append(f"damping = {d!r} must be 'none' or a table with kind = ...")
+    if out.get("drive") == "torque" and out.get("terms") == "full":
+        problems.append("terms = 'full' is for drive = 'prescribed' (the torque drive "
+                        "integrates eq. (1))")
     if out.get("drive") == "torque" and isinstance(out.get("damping"), Damping) and \
             out["damping"].kind == "modal":
         problems.append("drive = 'torque' takes Rayleigh damping or none")
@@ -223,7 +245,9 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
     if settings.drive == "prescribed":
         sim = simulate_prescribed(dyn, trajectory, after_s=settings.after_s,
                                   damping=settings.damping, sample_hz=settings.sample_hz,
-                                  rho_inf=settings.rho_inf, tol=settings.tol)
+                                  rho_inf=settings.rho_inf, tol=settings.tol,
+                                  terms=settings.terms, strict=settings.strict,
+                                  validity_threshold=settings.validity_threshold)
     else:
         from pinflex.dynamics.motion import JointMotion
 
@@ -234,6 +258,7 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
                               sample_hz=settings.sample_hz, rtol=settings.rtol,
                               atol=settings.atol,
                               rho_inf=0.9 if settings.rho_inf is None else settings.rho_inf,
-                              step_s=settings.step_s or None)
+                              step_s=settings.step_s or None, strict=settings.strict,
+                              validity_threshold=settings.validity_threshold)
     rep = vibration_report(dyn, sim, name=name, frame=settings.frame, xyz=settings.point)
     return rep, sim, dyn

@@ -46,27 +46,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pinflex import beam
+from pinflex.dynamics.carriers import Carriers, build_carriers
 from pinflex.erls.plan import attachment
 from pinflex.erls.terms import joint_step, joint_step_rate
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
-
-_GX, _GW = np.polynomial.legendre.leggauss(4)
-_GXI, _GWXI = 0.5 * (_GX + 1.0), 0.5 * _GW
-
-
-@dataclass(frozen=True)
-class _Carriers:
-    """Material points (or rotational carriers) of one link."""
-
-    link: str
-    c: np.ndarray  # (n, 3) positions in the link frame [m]
-    X: np.ndarray  # (n, 3, 6) X(c) = [I, -[c]x] (translational) or [0, I] (rotational)
-    C: np.ndarray  # (n, 3, nx) constant part of the elastic map (link axes)
-    D: np.ndarray | None  # (n, 3, 6) map of the link root twist, or None
-    mass: np.ndarray  # (n,) [kg] or (n, 3, 3) [kg m²] for rotational carriers
-    design: np.ndarray  # (n,) index of the design variable setting the mass, or -1
 
 
 @dataclass(frozen=True)
@@ -127,7 +111,7 @@ class ErlsDynamics:
         self.nx, self.nv = model.nx, model.nv
         self.ndof = self.nx + self.nv
         self._pdata = model.model.createData()
-        self._points, self._rotors = _build_carriers(model, self.y)
+        self._points, self._rotors = build_carriers(model, self.y)
         self._links = sorted({c.link for c in self._points} | {c.link for c in self._rotors},
                              key=model.plan.links.index)
         #: whether the joint offsets A(q) change with the pose (a joint on an element-0 point
@@ -178,7 +162,7 @@ class ErlsDynamics:
         self._rt_last = (key, out)
         return out
 
-    def _maps(self, p: _Carriers, J, Jd, e, ed):
+    def _maps(self, p: Carriers, J, Jd, e, ed):
         """``W = [E, S]``, and per unit joint velocity ``G_k`` and ``Ṡ_k`` of a carrier group."""
         JL = J[p.link]
         el, edl = e.get(p.link), ed.get(p.link)
@@ -369,6 +353,7 @@ class ErlsDynamics:
         return at
 
 
+
 def design_model(model, y: np.ndarray):
     """The model whose properties are those of design ``y`` (``model`` itself at its nominal).
 
@@ -390,6 +375,7 @@ def design_model(model, y: np.ndarray):
     if not params:
         return model
     return model.with_values(params)
+
 
 
 def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
@@ -428,97 +414,9 @@ def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
     return tw, rate
 
 
+
 def _jac(J, nv: int) -> np.ndarray:
     """A Pinocchio frame Jacobian as (6, nv): for one joint Pinocchio returns a (6,) vector."""
     return np.asarray(J).reshape(6, nv)
 
 
-# ---------------------------------------------------------------------- set-up
-def _xmap(c: np.ndarray) -> np.ndarray:
-    out = np.zeros(c.shape[:-1] + (3, 6))
-    out[..., :, :3] = np.eye(3)
-    out[..., :, 3:] = -skew(c)
-    return out
-
-
-def _build_carriers(model, y: np.ndarray):
-    desc = model.description
-    nx = model.nx
-    points: list[_Carriers] = []
-    rotors: list[_Carriers] = []
-    for link, plan in model.plan.beams.items():
-        spec = plan.spec
-        n = spec.elements
-        le = spec.length_m / n
-        shape = beam.shape_matrix(le, _GXI)  # (4, 6, 12) beam axes
-        rb = spec.rotation
-        cs, Cs, Ds, ms, Crs, Drs, Irs = [], [], [], [], [], [], []
-        ex = rb[:, 0]
-        for el in range(n):
-            rows = slice(6 * el, 6 * el + 12)
-            for g in range(_GXI.size):
-                Nt = rb @ shape[g, :3]
-                Nr = rb @ shape[g, 3:]
-                cs.append((el + _GXI[g]) / n * spec.tip)
-                Cs.append(Nt @ plan.sel[rows])
-                Ds.append(Nt @ plan.root[rows])
-                ms.append(spec.rhoA * le * _GWXI[g])
-                Crs.append(Nr @ plan.sel[rows])
-                Drs.append(Nr @ plan.root[rows])
-                Irs.append(spec.rhoIp * le * _GWXI[g] * np.outer(ex, ex))
-        c = np.array(cs)
-        points.append(_Carriers(link, c, _xmap(c), np.array(Cs), np.array(Ds),
-                                np.array(ms), -np.ones(len(ms), dtype=int)))
-        if spec.rhoIp > 0.0 and not model.planar:
-            rx = np.zeros((len(Irs), 3, 6))
-            rx[:, :, 3:] = np.eye(3)
-            rotors.append(_Carriers(link, c, rx, np.array(Crs), np.array(Drs),
-                                    np.array(Irs), -np.ones(len(Irs), dtype=int)))
-    for link in model.plan.inertias:
-        ine = desc.inertias[link]
-        c, m = _equivalent_points(ine.mass, ine.com, ine.inertia)
-        X = _xmap(c)
-        points.append(_Carriers(link, c, X, np.zeros((c.shape[0], 3, nx)), X, m,
-                                -np.ones(m.size, dtype=int)))
-    for pm in model.plan.point_masses:
-        name, link, xyz, att = pm.name, pm.link, pm.xyz, pm.attach
-        d = model.plan.design.mass_index.get(name, -1)
-        mass = y[d] if d >= 0 else model.point_mass_values[name]
-        C = np.zeros((1, 3, nx)) if att.const is None else att.const[None, :3]
-        D = None if att.lin is None else att.lin[None, :3]
-        points.append(_Carriers(link, np.asarray(xyz, float)[None], _xmap(np.asarray(
-            xyz, float)[None]), C, D, np.array([float(mass)]), np.array([d])))
-    return _merge(points), _merge(rotors)
-
-
-def _merge(groups: list[_Carriers]) -> list[_Carriers]:
-    """One carrier group per link (missing root maps become zeros)."""
-    out = []
-    for link in dict.fromkeys(g.link for g in groups):
-        gs = [g for g in groups if g.link == link]
-        Ds = [np.zeros(g.C.shape[:2] + (6,)) if g.D is None else g.D for g in gs]
-        out.append(_Carriers(
-            link, np.concatenate([g.c for g in gs]), np.concatenate([g.X for g in gs]),
-            np.concatenate([g.C for g in gs]), np.concatenate(Ds),
-            np.concatenate([g.mass for g in gs]), np.concatenate([g.design for g in gs])))
-    return out
-
-
-def _equivalent_points(mass: float, com: np.ndarray, inertia: np.ndarray):
-    """Seven points (signed masses) with the given mass, centre of mass and inertia tensor.
-
-    The second moment ``Q = ½ tr(I) 𝟙 − I`` about the centre of mass is reproduced by pairs of
-    points at ``± r_k`` along its principal axes; the centre point takes the rest of the mass.
-    """
-    Q = 0.5 * np.trace(inertia) * np.eye(3) - inertia
-    qk, V = np.linalg.eigh(0.5 * (Q + Q.T))
-    scale = max(np.sqrt(max(np.trace(inertia), 0.0) / max(mass, 1e-300)), 1e-3)
-    pts = [np.asarray(com, dtype=float)]
-    masses = []
-    for k in range(3):
-        mk = qk[k] / (2.0 * scale**2)
-        for s in (1.0, -1.0):
-            pts.append(com + s * scale * V[:, k])
-            masses.append(mk)
-    masses.insert(0, mass - sum(masses))
-    return np.array(pts), np.array(masses)

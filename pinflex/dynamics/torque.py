@@ -45,6 +45,8 @@ def simulate_torque(
     corrections: int = 1,
     coefficient_step_s: float = 0.0,
     step_s: float | None = None,
+    strict: bool = False,
+    validity_threshold: float | None = None,
 ) -> Simulation:
     """Forward dynamics of eq. (1) under motor torques (free joints between the motors).
 
@@ -92,6 +94,12 @@ def simulate_torque(
             relative to ``max |x|`` (``rtol``, ``atol`` unused). There is no stability
             guarantee for this nonlinear drive at a fixed step: a diverging run raises
             :class:`SimulationError`.
+        strict: Refuse a reference ``trajectory`` too fast for eq. (1) (its validity
+            indicator above ``validity_threshold``;
+            :class:`~pinflex.exceptions.ModelValidityError`, before the run).
+        validity_threshold: Threshold of the indicator (default
+            :data:`pinflex.erls.validity.VALIDITY_THRESHOLD`). ``Simulation.validity`` holds
+            the indicator of the reference motion, or of the simulated one without it.
     """
     check_positive(duration_s=duration_s, sample_hz=sample_hz, rtol=rtol, atol=atol,
                     atol_q=atol_q)
@@ -115,6 +123,14 @@ def simulate_torque(
     if torque is None and trajectory is not None:
         motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
 
+    indicator = None
+    if motion is not None:  # the reference motion, before the run (strict refuses here)
+        from pinflex.dynamics.prescribed import motion_validity
+        from pinflex.erls.validity import VALIDITY_THRESHOLD
+
+        indicator = motion_validity(
+            dyn, motion, strict=strict,
+            threshold=VALIDITY_THRESHOLD if validity_threshold is None else validity_threshold)
     if not (np.isfinite(coefficient_step_s) and coefficient_step_s >= 0.0):
         raise ConfigurationError(f"coefficient_step_s = {coefficient_step_s!r} must be >= 0")
 
@@ -214,7 +230,18 @@ def simulate_torque(
         servo_stiffness=float(kp) if motion is not None else 0.0,
         torque_times_s=t_tau, torques=tau, steps=run.steps, nfev=run.nfev, time_s=elapsed,
         method="newmark" if step_s is None else "fixed", error_estimate=estimate,
+        validity=indicator if indicator is not None else _run_validity(
+            dyn, times, z[:, nx:], zd[:, nx:], validity_threshold),
     )
+
+
+def _run_validity(dyn, times, q, qd, threshold):
+    """The indicator of a torque-driven run without a reference motion (its own rates)."""
+    from pinflex.dynamics.response import locked_validity
+
+    qdd = np.gradient(qd, times, axis=0, edge_order=2) if times.size >= 3 else np.zeros_like(qd)
+    return locked_validity(dyn, times, q, qd, qdd, threshold=threshold,
+                           what="the torque-driven motion")
 
 
 def energy(dyn: ErlsDynamics, z: np.ndarray, zd: np.ndarray) -> float:
