@@ -1,4 +1,14 @@
-"""Damping of the elastic motion: Rayleigh or modal ratios."""
+"""Damping of the elastic motion: Rayleigh or modal ratios, one meaning everywhere.
+
+Rayleigh ``(α, β)`` damps the deformation only (the rigid motion is not damped), with the mass
+and stiffness of the arm whose motors are held (:func:`pinflex.linalg.held_rayleigh`):
+``C_x = α M_H + β K_H`` on the elastic coordinates. Each locked-joint mode ``i`` decays at
+``α/2 + β ω_i²/2`` (damping ratio ``α/(2 ω_i) + β ω_i / 2``), in the prescribed drive, the
+torque drive, the receptances (:mod:`pinflex.dynamics.frf`) and the exported linear models
+(:func:`pinflex.native.export.linear_model`). Modal ratios ``ζ_i`` are those of the
+locked-joint modes in the simulations and of the analysed system's elastic modes in the
+receptances and exports.
+"""
 
 from __future__ import annotations
 
@@ -14,7 +24,8 @@ class Damping:
     """Damping of the elastic motion.
 
     Attributes:
-        kind: ``"none"``, ``"rayleigh"`` (``α Me + β Ke``) or ``"modal"`` (ratios ζ).
+        kind: ``"none"``, ``"rayleigh"`` (``α M_H + β K_H`` of the deformation, module doc)
+            or ``"modal"`` (ratios ζ).
         alpha: Mass-proportional coefficient α [1/s].
         beta: Stiffness-proportional coefficient β [s].
         ratios: Modal damping ratios ζ_i of the lowest locked-joint modes; the last value is

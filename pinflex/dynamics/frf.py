@@ -28,6 +28,7 @@ import scipy.linalg
 
 from pinflex.dynamics.damping import Damping
 from pinflex.exceptions import ConfigurationError
+from pinflex.linalg import held_rayleigh
 
 
 @dataclass(frozen=True)
@@ -93,8 +94,10 @@ def linear_pose(dyn, q, inputs, outputs, *, damping: Damping | None = None,
         Z = np.vstack([np.eye(nx), A])
         M, K, B, Y = Z.T @ M @ Z, Z.T @ K @ Z, Z.T @ B, Y @ Z
     damping = damping or Damping()
-    if damping.kind == "rayleigh":
+    if damping.kind == "rayleigh" and joints == "locked":
         C = damping.alpha * M + damping.beta * K
+    elif damping.kind == "rayleigh":  # the deformation's, motors held (linalg.held_rayleigh)
+        C = held_rayleigh(M, K, G, nx, damping.alpha, damping.beta)
     elif damping.kind == "modal":
         lam, phi = scipy.linalg.eigh(K, M)
         w = np.sqrt(np.clip(lam, 0.0, None))
@@ -117,8 +120,9 @@ def frf(lp: LinearPose, freqs_hz) -> np.ndarray:
     cd = phi.T @ lp.C @ phi
     off = np.abs(cd - np.diag(np.diag(cd))).max()
     if off > 1e-8 * max(np.abs(cd).max(), 1e-300):
-        raise ConfigurationError("the damping is not classical: the modes do not decouple it; "
-                                 "use frf_direct")
+        # not classical (the deformation's Rayleigh damping with free joints, or modal ratios
+        # that the modes do not decouple): the direct solve is exact
+        return frf_direct(lp, freqs_hz)
     c = np.diag(cd)
     left = lp.Y @ phi
     right = phi.T @ lp.B

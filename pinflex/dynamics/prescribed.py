@@ -71,6 +71,7 @@ class _Coefficients:
     f: np.ndarray  # (nx,)
     A: np.ndarray  # (nv, nx)
     full: tuple = field(default=())  # (M, Ck, K, F) of eq. (1), for the torques
+    K_eq1: np.ndarray | None = None  # (nx, nx) K without the speed terms (Rayleigh β)
 
 
 
@@ -122,20 +123,21 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     nx, nv = dyn.nx, dyn.nv
     q, qd, qdd = (np.asarray(v, dtype=float) for v in (q, qd, qdd))
     M, Ck, K, F = dyn.linear_terms(q)
-    if terms == "full":
-        K = K + speed_stiffness(dyn, q, qd, qdd)
     A, Adk = dyn.joint_offsets(q)
     Z = np.vstack([np.eye(nx), A])
+    K_eq1 = Z.T @ K @ Z
+    if terms == "full":
+        K = K + speed_stiffness(dyn, q, qd, qdd)
     C = np.tensordot(qd, Ck, axes=(0, 0))
     zq = np.concatenate([np.zeros(nx), qd])
     Cq = np.stack([Ck[k] @ zq for k in range(nv)], axis=1) if nv else np.zeros((dyn.ndof, 0))
     Ad = np.tensordot(qd, Adk, axes=(0, 0)) if nv else np.zeros((0, nx))
     ML = Z.T @ M @ Z
     CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
-    KL = Z.T @ K @ Z
+    KL = Z.T @ K @ Z if terms == "full" else K_eq1
     rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
     F = F + force
-    return _Coefficients(ML, CL, KL, Z.T @ (F - rigid), A, (M, Ck, K, F))
+    return _Coefficients(ML, CL, KL, Z.T @ (F - rigid), A, (M, Ck, K, F), K_eq1)
 
 
 class PrescribedSystem:
@@ -179,7 +181,7 @@ class PrescribedSystem:
         out = locked_coefficients(self.dyn, q, qd, qdd, terms=self.terms,
                                   force=external_forces(self.forces, q, t))
         if damped:
-            out.C = out.C + self._damping(out.full[0], out.full[2], out.M, out.K)
+            out.C = out.C + self._damping(out.M, out.K if out.K_eq1 is None else out.K_eq1)
         return out
 
     def torque(self, t: float, y: np.ndarray, xdd: np.ndarray | None = None) -> np.ndarray:
@@ -204,10 +206,11 @@ class PrescribedSystem:
         r = M @ zdd + np.tensordot(zd[nx:], Ck, axes=(0, 0)) @ zd + K @ z - F
         return np.linalg.solve(self.dyn.model.coord_map.T, r[nx:])
 
-    def _damping(self, M, K, ML, KL) -> np.ndarray:
+    def _damping(self, ML, KL) -> np.ndarray:
+        """Damping of the locked-joint system: Rayleigh ``α M_L + β K_L``, or modal ratios."""
         d, nx = self.damping, self.nx
         if d.kind == "rayleigh":
-            return d.alpha * M[:nx, :nx] + d.beta * K[:nx, :nx]
+            return d.alpha * ML + d.beta * KL
         if d.kind == "modal" and self._Dmodal is not None:
             return self._Dmodal
         return np.zeros((nx, nx))

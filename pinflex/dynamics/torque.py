@@ -22,6 +22,7 @@ from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, check_positive, output_times
 from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.exceptions import ConfigurationError
+from pinflex.linalg import held_rayleigh
 
 
 def simulate_torque(
@@ -184,8 +185,8 @@ def simulate_torque(
     def coeff(t, z, zd):
         M, Ck, K, F, G = pose_terms(t, z[nx:])
         C = np.tensordot(zd[nx:], Ck, axes=(0, 0))
-        if damping.kind == "rayleigh":
-            C[:nx, :nx] += damping.alpha * M[:nx, :nx] + damping.beta * K[:nx, :nx]
+        if damping.kind == "rayleigh":  # the deformation's, motors held (linalg.held_rayleigh)
+            C += held_rayleigh(M, K, G, nx, damping.alpha, damping.beta)
         f = F + G.T @ applied(t, z, zd, G, None) + K @ z_ref
         return M, C, K, f
 

@@ -18,7 +18,10 @@ rigid motion).
 
 Damping ``Dₚ``: none (default), modal (a ratio ζ for every elastic mode:
 ``Dₚ = M Φ diag(2 ζ ω) Φᵀ M`` with the mass-normalised elastic mode shapes ``Φ``, leaving the
-rigid modes undamped), or Rayleigh ``Dₚ = α M + β K``.
+rigid modes undamped), or Rayleigh ``(α, β)`` with its one meaning in pinflex
+(:func:`pinflex.linalg.held_rayleigh`): ``α M_H + β K_H`` on the deformation rates, ``M_H``,
+``K_H`` the mass and stiffness of the arm with its motors held, so each locked-joint mode
+decays at ``α/2 + β ω²/2`` and the rigid motion is not damped (as in the simulations and FRFs).
 """
 
 from __future__ import annotations
@@ -29,15 +32,20 @@ import numpy as np
 import scipy.linalg
 
 from pinflex.exceptions import ConfigurationError
+from pinflex.linalg import held_rayleigh
 
 
 def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh) -> dict:
     M, K = arm.matrices(q, y)
     nd, nv, nx = arm.ndof, arm.nv, arm.nx
     nr = arm.n_rigid  # free joints (joint springs and locks: pinflex.erls.joints)
-    if rayleigh is not None:
+    if rayleigh is not None:  # the deformation's, motors held (linalg.held_rayleigh)
         alpha, beta = (float(v) for v in rayleigh)
-        damping = alpha * M + beta * K
+        G = arm.relative_motion_rows(q)
+        if nd != nx + nv:
+            G = G @ arm.joint_transform(q)
+        G = G[np.abs(G).max(axis=1) > 0.0]  # locked joints have no relative motion
+        damping = held_rayleigh(M, K, G, nx, alpha, beta)
     else:
         damping = np.zeros_like(M)
     lam, phi = scipy.linalg.eigh(K, M)
@@ -72,7 +80,8 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None) -> dict:
             of length nq are accepted) [rad or m].
         y: Design values [kg] (default: nominal).
         zeta: Modal damping ratio of every elastic mode (>= 0).
-        rayleigh: ``(alpha [1/s], beta [s])`` for ``α M + β K``, added to the modal damping.
+        rayleigh: ``(alpha [1/s], beta [s])``: Rayleigh damping of the deformation (module
+            doc), added to the modal damping.
 
     Returns:
         A dictionary of arrays: ``M``, ``K``, ``damping`` (ndof, ndof), ``A`` (2 ndof, 2 ndof),
