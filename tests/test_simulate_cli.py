@@ -126,6 +126,9 @@ def test_locked_joint_with_out_writes_the_playback(tmp_path, capsys):
     assert rc == 0
     files = json.loads(capsys.readouterr().out)["files"]
     assert any(f.endswith("design_playback.html") for f in files)
+    assert any(f.endswith("validity.png") for f in files)
+    rows = (tmp_path / "out" / "design_validity.csv").read_text().splitlines()
+    assert rows[0].startswith("time_s,link_speed_rad_s") and len(rows) > 10
     model = FlexibleModel(urdf, planar=True)
     dyn = ErlsDynamics(model)
     x = np.random.default_rng(3).standard_normal(model.nx)

@@ -170,6 +170,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         out = output_dir(args.out)
         files.append(str(deflection_chart(reports, out / "tip_deflection.png")))
+        named = [(rep.name, sim.validity) for rep, (sim, _) in zip(reports, sims)
+                 if sim.validity is not None]
+        if named:
+            from pinflex.dynamics.charts import validity_chart
+
+            files.append(str(validity_chart(named, out / "validity.png")))
         for rep, (sim, _) in zip(reports, sims):
             p = out / f"{rep.name}_series.json"
             write_text(p, rep.to_json(series=True), "simulation JSON")
