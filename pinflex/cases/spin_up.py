@@ -81,7 +81,8 @@ def spin_up_model(path):
     from pathlib import Path
 
     from pinflex.erls import FlexibleModel
+    from pinflex.outputs import write_text
 
     p = Path(path)
-    p.write_text(KANE_URDF)
+    write_text(p, KANE_URDF, "URDF")
     return FlexibleModel(p, planar=True)
