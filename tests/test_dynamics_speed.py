@@ -74,16 +74,12 @@ class SpinUp(JointMotion):
         return self.theta(times)[:, None], np.asarray(qd)[:, None], np.asarray(qdd)[:, None]
 
 
-def rotating_frame_fe(motion, times, *, full, n=10, L=10.0, EI=1.4e4, EA=1.4e7, rhoA=1.2):
-    """Tip deflection v(L, t) of the beam clamped to the hub, in the rotating frame.
+def rotating_frame_matrices(*, n=10, L=10.0, EI=1.4e4, EA=1.4e7, rhoA=1.2):
+    """``(M, G, K, KG, fu, fv)`` of the beam clamped to the hub, rotating frame (see below).
 
-    Axial (linear) and bending (cubic Hermite) fields, consistent matrices by Gauss
-    quadrature; linearised in the elastic displacement ``(u, v)``:
-
-        ρA (ü − 2θ̇v̇ − θ̈v − θ̇²u) − EA u'' = ρA θ̇² s,
-        ρA (v̈ + 2θ̇u̇ + θ̈u − θ̇²v) + EI v'''' − (N v')' = −ρA θ̈ s,  N = ρA θ̇² (L² − s²)/2,
-
-    where eq. (1) keeps only the Coriolis terms ``2θ̇u̇``, ``−2θ̇v̇`` (``full=False``).
+    Axial (linear) and bending (cubic Hermite) fields, consistent matrices by Gauss quadrature;
+    ``KG`` is the geometric stiffness per unit θ̇² of ``N = ρA (L² − s²)/2``, ``G = Muvᵀ − Muv``
+    the Coriolis/Euler coupling; the root node is clamped; the tip's ``v`` is entry ``-2``.
     """
     le = L / n
     gx, gw = np.polynomial.legendre.leggauss(6)
@@ -115,8 +111,22 @@ def rotating_frame_fe(motion, times, *, full, n=10, L=10.0, EI=1.4e4, EA=1.4e7, 
     Muu, Mvv, Muv, K, KG = (a[np.ix_(keep, keep)] for a in (Muu, Mvv, Muv, K, KG))
     fu, fv = fu[keep], fv[keep]
     M = Muu + Mvv
+    return M, Muv.T - Muv, K, KG, fu, fv
+
+
+def rotating_frame_fe(motion, times, *, full, n=10, L=10.0, EI=1.4e4, EA=1.4e7, rhoA=1.2):
+    """Tip deflection v(L, t) of the beam clamped to the hub, in the rotating frame.
+
+    Axial (linear) and bending (cubic Hermite) fields, consistent matrices by Gauss
+    quadrature; linearised in the elastic displacement ``(u, v)``:
+
+        ρA (ü − 2θ̇v̇ − θ̈v − θ̇²u) − EA u'' = ρA θ̇² s,
+        ρA (v̈ + 2θ̇u̇ + θ̈u − θ̇²v) + EI v'''' − (N v')' = −ρA θ̈ s,  N = ρA θ̇² (L² − s²)/2,
+
+    where eq. (1) keeps only the Coriolis terms ``2θ̇u̇``, ``−2θ̇v̇`` (``full=False``).
+    """
+    M, G, K, KG, fu, fv = rotating_frame_matrices(n=n, L=L, EI=EI, EA=EA, rhoA=rhoA)
     Mi = np.linalg.inv(M)
-    G = Muv.T - Muv  # Coriolis (and Euler) coupling of u and v
     m = M.shape[0]
 
     def stiffness(thd, thdd):
@@ -296,3 +306,31 @@ def test_modes_along_a_spinning_hub_report_and_warn_the_validity(tmp_path):
     assert float(first.split(",")[-2]) == pytest.approx(0.25, rel=1e-4)
     with pytest.raises(ModelValidityError):
         modes_along(model, traj, modes=2, strict=True)
+
+
+@pytest.mark.parametrize("terms", ["full", "eq1"])
+def test_receptance_of_the_spinning_beam_equals_the_rotating_frame_fe(kane, terms):
+    """The linearised model about a moving state: Kane's beam spinning at Ω = 6 rad/s.
+
+    Tip transverse force to tip transverse displacement, undamped, away from resonance,
+    against the rotating-frame FE ``(K_Ω − ω² M + 2iωΩ G)⁻¹`` written here
+    (``K_Ω = K − Ω² M + Ω² K_G`` with the full terms, ``K`` with eq. (1)'s).
+    """
+    from pinflex.dynamics.frf import frf, frf_direct, linear_pose
+
+    omega = 6.0
+    M, G, K, KG, _, _ = rotating_frame_matrices()
+    K_rot = K - omega**2 * M + omega**2 * KG if terms == "full" else K
+    e = np.zeros(M.shape[0])
+    e[-2] = 1.0  # the tip's v
+    tip = ("beam", (10.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    lp = linear_pose(kane, [0.0], [("force", *tip)], [("displacement", *tip)],
+                     joints="locked", qd=[omega], terms=terms)
+    freqs = np.array([0.05, 0.3, 0.9, 2.5, 7.0])
+    ref = np.array([e @ np.linalg.solve(K_rot - w**2 * M + 2j * w * omega * G, e)
+                    for w in 2 * np.pi * freqs])
+    got = frf(lp, freqs)[:, 0, 0]
+    assert np.abs(got - ref).max() <= 1e-6 * np.abs(ref).max()
+    assert np.array_equal(got, frf_direct(lp, freqs)[:, 0, 0])  # gyroscopic: solved directly
+    with pytest.raises(Exception, match="joints='locked'"):
+        linear_pose(kane, [0.0], [("force", *tip)], [("displacement", *tip)], qd=[omega])
