@@ -334,3 +334,27 @@ def test_receptance_of_the_spinning_beam_equals_the_rotating_frame_fe(kane, term
     assert np.array_equal(got, frf_direct(lp, freqs)[:, 0, 0])  # gyroscopic: solved directly
     with pytest.raises(Exception, match="joints='locked'"):
         linear_pose(kane, [0.0], [("force", *tip)], [("displacement", *tip)], qd=[omega])
+
+
+def test_modes_at_speed_along_a_constant_spin_equal_the_rotating_frame_fe(kane):
+    """Along a constant spin (Ω = 6 rad/s) the modes are the rotating-frame FE's.
+
+    The imaginary parts of the gyroscopic eigenvalues of ``M ÿ + 2Ω G ẏ + K_Ω y = 0``.
+    """
+    from pinflex.dynamics.modes import modes_at_speed_along
+
+    omega = 6.0
+    M, G, K, KG, _, _ = rotating_frame_matrices()
+    K_rot = K - omega**2 * M + omega**2 * KG
+    m = M.shape[0]
+    A = np.zeros((2 * m, 2 * m))
+    A[:m, m:] = np.eye(m)
+    A[m:, :m] = -np.linalg.solve(M, K_rot)
+    A[m:, m:] = -np.linalg.solve(M, 2 * omega * G)
+    lam = np.linalg.eigvals(A)
+    ref = np.sort(np.abs(lam.imag[lam.imag > 0]))[:3] / (2 * math.pi)
+    # after the spin-up the hub turns at Ωs with exact rates
+    res = modes_at_speed_along(kane, SpinUp(omega), times=np.array([TS, TS + 0.5, TS + 2.0]))
+    assert not res.unstable.any()
+    for row in res.freq_hz:
+        assert row == pytest.approx(ref, rel=1e-7)

@@ -15,7 +15,7 @@ How far eq. (1) holds along a motion (the validity indicator every simulation re
 :mod:`pinflex.erls.validity`.
 """
 
-from pinflex.dynamics.modes import ModesAtSpeed, modes_at_speed
+from pinflex.dynamics.modes import ModesAtSpeed, modes_at_speed, modes_at_speed_along
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.response import (
     VibrationReport,
@@ -47,6 +47,7 @@ __all__ = [
     "frame_deflection",
     "locked_frequencies",
     "modes_at_speed",
+    "modes_at_speed_along",
     "newmark",
     "simulate_prescribed",
     "simulate_torque",

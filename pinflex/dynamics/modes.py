@@ -12,7 +12,9 @@ speed and the chordwise ones much less (checked against a published table in the
 
 A state whose stiffness is no longer positive (a column past buckling, a beam spun into
 divergence) gives an eigenvalue with a positive real part: :class:`ModesAtSpeed` reports it in
-``unstable`` and its frequency in ``growth_rate_1_s``.
+``unstable`` and its frequency in ``growth_rate_1_s``. With an angular acceleration the frozen
+system is not conservative (the Euler term): real parts of order ``|α_L| / ω_i`` of either sign
+appear, which are not a growth of the moving arm. :func:`modes_at_speed_along` follows a motion.
 """
 
 from __future__ import annotations
@@ -89,3 +91,51 @@ def modes_at_speed(dyn, q, qd=None, qdd=None, *, terms: str = "full",
     scale = np.abs(lam).max() if lam.size else 1.0
     return ModesAtSpeed(np.abs(lam.imag) / (2.0 * np.pi), lam.real, V[:nx],
                         bool(np.any(lam.real > 1e-7 * scale)), terms)
+
+
+@dataclass(frozen=True)
+class ModesAtSpeedAlong:
+    """Modes of the moving arm at the samples of a motion (:func:`modes_at_speed_along`).
+
+    Attributes:
+        times_s: Sample times (ns,) [s].
+        freq_hz: Lowest frequencies (ns, k) [Hz], sorted at each sample.
+        growth_rate_1_s: Real parts (ns, k) [1/s].
+        unstable: Per sample, whether an eigenvalue grows (ns,).
+        terms: ``"eq1"`` or ``"full"``.
+    """
+
+    times_s: np.ndarray
+    freq_hz: np.ndarray
+    growth_rate_1_s: np.ndarray
+    unstable: np.ndarray
+    terms: str
+
+
+def modes_at_speed_along(dyn, trajectory, *, terms: str = "full", n_modes: int = 3,
+                         times=None) -> ModesAtSpeedAlong:
+    """:func:`modes_at_speed` at every sample of a joint motion (rates of its interpolation).
+
+    Args:
+        dyn: The :class:`~pinflex.dynamics.ErlsDynamics`.
+        trajectory: A :class:`~pinflex.Trajectory` or a
+            :class:`~pinflex.dynamics.motion.JointMotion` (its exact rates).
+        terms: ``"full"`` (default) or ``"eq1"``.
+        n_modes: Modes per sample.
+        times: Sample times (default the trajectory's).
+
+    Returns:
+        :class:`ModesAtSpeedAlong`.
+    """
+    from pinflex.dynamics.motion import JointMotion
+
+    motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
+    t = np.asarray(motion.trajectory.times_s if times is None else times, dtype=float)
+    q, qd, qdd = motion.sample(t)
+    k = max(1, min(int(n_modes), dyn.nx))
+    freq, growth = np.empty((t.size, k)), np.empty((t.size, k))
+    unstable = np.zeros(t.size, dtype=bool)
+    for i in range(t.size):
+        r = modes_at_speed(dyn, q[i], qd[i], qdd[i], terms=terms, n_modes=k)
+        freq[i], growth[i], unstable[i] = r.freq_hz, r.growth_rate_1_s, r.unstable
+    return ModesAtSpeedAlong(t, freq, growth, unstable, check_terms(terms))
