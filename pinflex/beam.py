@@ -226,3 +226,41 @@ def assemble_line(blocks: np.ndarray) -> np.ndarray:
     out = np.zeros((n, n))
     np.add.at(out, (rows[:, :, None], rows[:, None, :]), blocks)
     return out
+
+
+#: Points ``x / L`` of the element quadrature (5-point Gauss–Legendre) at which
+#: :func:`element_geometric_stiffness` takes a varying axial force.
+GEOMETRIC_POINTS = _GAUSS_XI.copy()
+GEOMETRIC_POINTS.flags.writeable = False
+
+
+def element_geometric_stiffness(length_m: float, axial_force_n) -> np.ndarray:
+    """Geometric stiffness (12, 12) of an element under an axial force, in beam axes.
+
+    The second-order strain energy of a beam prestressed by the axial force ``N(x)``
+    (tension positive) is ``½ ∫ N (v'² + w'²) dx``, with the slopes of the cubic Hermite
+    bending fields (``v' = θz``, ``w' = −θy``). Axial, torsional and shear prestress
+    terms are left out.
+
+    Args:
+        length_m: Element length L [m].
+        axial_force_n: Axial force [N]: one number (constant along the element), or its
+            values at :data:`GEOMETRIC_POINTS` (shape (..., 5); exact for a force polynomial
+            of degree up to 3 along the element), giving matrices (..., 12, 12).
+
+    Returns:
+        ``K_G`` (12, 12) or (..., 12, 12) [N/m, N, N m]; for a constant force ``N`` its bending
+        blocks are the classical ``N / (30 L) [[36, 3L, −36, 3L], [3L, 4L², −3L, −L²], ...]``.
+    """
+    slopes = shape_matrix(length_m, _GAUSS_XI)[:, 4:6, :]  # (5, 2, 12): θy, θz
+    unit = np.einsum("kai,kaj->kij", slopes, slopes)  # (5, 12, 12)
+    force = np.asarray(axial_force_n, dtype=float)
+    w = _GAUSS_WXI * float(length_m)
+    if force.ndim == 0:
+        return float(force) * np.einsum("k,kij->ij", w, unit)
+    if force.shape[-1] != _GAUSS_XI.size:
+        raise InvalidBeamProperty(
+            f"axial_force_n has shape {force.shape}: give one number or the values at the "
+            f"{_GAUSS_XI.size} points GEOMETRIC_POINTS"
+        )
+    return np.einsum("...k,k,kij->...ij", force, w, unit)

@@ -332,3 +332,15 @@ class DampingNotRepresentable(ConfigurationError):
 
 class OutputExists(OutputError):
     """An output file exists and overwriting it was not allowed (``--force``)."""
+
+
+class ModelValidityWarning(PinflexWarning):
+    """A motion is fast enough that the terms eq. (1) leaves out matter (see validity)."""
+
+
+class ModelValidityError(PinflexError):
+    """``strict``: a motion is too fast for eq. (1) (:func:`pinflex.erls.validity`)."""
+
+    def __init__(self, message: str, validity=None):
+        self.validity = validity
+        super().__init__(message)

@@ -51,3 +51,35 @@ def readonly(values) -> np.ndarray:
     array = np.array(values, dtype=float)
     array.setflags(write=False)
     return array
+
+
+def held_rayleigh(M: np.ndarray, K: np.ndarray, G: np.ndarray, nx: int, alpha: float,
+                  beta: float) -> np.ndarray:
+    """Rayleigh damping of the deformation: ``α M_H + β K_H`` on the elastic coordinates.
+
+    The one meaning of Rayleigh ``(α, β)`` in pinflex (simulation, FRF, export): the damping
+    forces act on the deformation rate ``ẋ`` only (rigid motion is not damped), with the mass
+    and stiffness of the arm whose motors are held, ``M_H = Zᵀ M Z``, ``K_H = Zᵀ K Z``, where
+    ``Z = [I; −G_q⁻¹ G_x]`` spans the motions with no relative joint motion ``G z = 0``. Every
+    locked-joint mode ``i`` then decays at ``α/2 + β ω_i²/2`` (damping ratio
+    ``α/(2ω_i) + β ω_i/2``).
+
+    Args:
+        M: Mass matrix (n, n) over ``z = [x; q]`` (the first ``nx`` elastic).
+        K: Stiffness matrix (n, n).
+        G: Relative joint motion rows (m, n) ``r = G z`` of the joints not locked, ``G_q``
+            (m, n − nx) invertible; ``m = 0`` when every joint is locked.
+        nx: Number of elastic coordinates.
+        alpha: Mass coefficient α [1/s].
+        beta: Stiffness coefficient β [s].
+
+    Returns:
+        ``C`` (n, n), zero outside the ``x`` block.
+    """
+    n = M.shape[0]
+    Z = np.eye(n)[:, :nx]
+    if n > nx:
+        Z[nx:] = -np.linalg.solve(G[:, nx:], G[:, :nx])
+    C = np.zeros((n, n))
+    C[:nx, :nx] = Z.T @ (alpha * M + beta * K) @ Z
+    return C

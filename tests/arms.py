@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import reference_fe as ref
 from reference_fe import Beam, spatial_frame_frequencies
+
+from pinflex.trajectory import Trajectory
 
 
 def two_link(section1, section2, *, params="", material='E="69e9" density="2687"',
@@ -130,3 +133,24 @@ def spatial_reference(q, m1, m2, e1=5, e2=4, *, springs=None, elbow=None):
         np.array([np.zeros(3), p1, p2]), beams, [Rj @ a2 if elbow is None else elbow],
         point_masses=[(p1, m1), (p2, m2)], base=np.array([0.0, 0.0, 1.0]), springs=springs,
     )
+
+
+def move(q_start, q_end, duration, n=41, t0=0.0):
+    """Minimum-jerk joint motion (rest to rest) sampled at n points."""
+    t = np.linspace(0.0, duration, n)
+    s = t / duration
+    h = 10 * s**3 - 15 * s**4 + 6 * s**5
+    q = np.asarray(q_start)[None] + h[:, None] * (np.asarray(q_end) - np.asarray(q_start))[None]
+    return Trajectory(t + t0, q, ("q1", "q2"))
+
+
+def locked_global_fe(q_abs, m1, m2):
+    """Global FE of benchmark A with the base clamped and the elbow welded (independent)."""
+    K, M = ref.planar_two_link_matrices(q_abs, m1, m2)
+    n = K.shape[0]
+    T = np.zeros((n, n - 2))
+    keep = [i for i in range(n) if i not in (0, 13)]
+    for col, i in enumerate(keep):
+        T[i, col] = 1.0
+    T[13, keep.index(12)] = 1.0  # link-2 rotation at the elbow = link-1 rotation there
+    return T.T @ K @ T, T.T @ M @ T, keep

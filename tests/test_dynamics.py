@@ -10,6 +10,8 @@ import pinocchio as pin
 import pytest
 import reference_fe as ref
 import scipy.linalg
+from arms import locked_global_fe as _locked_global_fe
+from arms import move as _move
 
 from pinflex import FlexibleModel
 from pinflex.dynamics import (
@@ -18,7 +20,6 @@ from pinflex.dynamics import (
     simulate_prescribed,
     vibration_report,
 )
-from pinflex.trajectory import Trajectory
 
 URDF = Path(__file__).resolve().parents[1] / "urdf"
 
@@ -27,15 +28,6 @@ URDF = Path(__file__).resolve().parents[1] / "urdf"
 def arm():
     """Benchmark A, planar."""
     return FlexibleModel(URDF / "two_link.urdf", planar=True)
-
-
-def _move(q_start, q_end, duration, n=41, t0=0.0):
-    """Minimum-jerk joint motion (rest to rest) sampled at n points."""
-    t = np.linspace(0.0, duration, n)
-    s = t / duration
-    h = 10 * s**3 - 15 * s**4 + 6 * s**5
-    q = np.asarray(q_start)[None] + h[:, None] * (np.asarray(q_end) - np.asarray(q_start))[None]
-    return Trajectory(t + t0, q, ("q1", "q2"))
 
 
 def test_mass_and_stiffness_equal_the_erls_assembly():
@@ -85,18 +77,6 @@ def test_erls_acceleration_and_root_rate_match_finite_differences():
         p = next(g for g in dyn._points if g.link == link)
         Ed = 0 * Ed_fd if ed.get(link) is None else np.einsum("nab,kbx,k->nax", p.D, ed[link], v)
         assert np.abs(Ed - Ed_fd).max() <= 1e-6 * max(1.0, np.abs(Ed_fd).max()), link
-
-
-def _locked_global_fe(q_abs, m1, m2):
-    """Global FE of benchmark A with the base clamped and the elbow welded (independent)."""
-    K, M = ref.planar_two_link_matrices(q_abs, m1, m2)
-    n = K.shape[0]
-    T = np.zeros((n, n - 2))
-    keep = [i for i in range(n) if i not in (0, 13)]
-    for col, i in enumerate(keep):
-        T[i, col] = 1.0
-    T[13, keep.index(12)] = 1.0  # link-2 rotation at the elbow = link-1 rotation there
-    return T.T @ K @ T, T.T @ M @ T, keep
 
 
 def test_residual_vibration_has_the_locked_joint_frequency(arm):

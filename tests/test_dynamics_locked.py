@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.linalg
-from test_dynamics import _locked_global_fe, _move
+from arms import locked_global_fe as _locked_global_fe
+from arms import move as _move
 
 from pinflex import FlexibleModel
 from pinflex.dynamics import ErlsDynamics, simulate_prescribed, vibration_report

@@ -35,11 +35,13 @@ def test_undamped_eigenvalues_are_plus_minus_i_omega(arm):
     ev = _elastic_eigs(data["A"], arm.nv)
     assert np.abs(ev.real).max() < 1e-6 * omega.max()
     np.testing.assert_allclose(np.sort(ev.imag[ev.imag > 0]), omega, rtol=1e-7)
-    # B maps a torque on joint j to M⁻¹ Bu: M ṗ̇ = Cᵀ τ in absolute coordinates
+    # B maps a torque on joint j to M⁻¹ Bu; the generalized reading: M p̈ = Cᵀ τ in
+    # absolute coordinates (the default motor torques: tests/test_export_motor_torque.py)
     nd = arm.ndof
-    M = data["M"]
-    np.testing.assert_allclose(M @ data["B"][nd:], np.vstack([np.zeros((arm.nx, 2)),
-                                                              arm.coord_map.T]), atol=1e-10)
+    gen = linear_model(arm, q, torque_input="generalized")
+    np.testing.assert_allclose(gen["M"] @ gen["B"][nd:], np.vstack([np.zeros((arm.nx, 2)),
+                                                                    arm.coord_map.T]),
+                               atol=1e-10)
     assert data["coordinates"][-2:].tolist() == list(arm.joint_names)
     assert data["A"].shape == (2 * nd, 2 * nd) and data["C"].shape == (nd, 2 * nd)
 
@@ -59,10 +61,15 @@ def test_modal_damping_gives_damped_pairs(arm):
 
 
 def test_rayleigh_and_files_along_a_trajectory(arm, tmp_path):
-    """Rayleigh αM + βK; npz and mat files hold the stacked models with names."""
+    """Rayleigh damps the deformation only; npz and mat files hold the stacked models.
+
+    No damping force on the joint rows (tests/test_damping_definition.py checks the rates).
+    """
     q = np.array([[0.4, 1.1], [0.5, 1.3], [0.7, 1.6]])
     data = linear_model(arm, q, rayleigh=(0.5, 1e-5))
-    np.testing.assert_allclose(data["damping"], 0.5 * data["M"] + 1e-5 * data["K"])
+    assert np.abs(data["damping"][:, arm.nx:]).max() == 0.0
+    assert np.abs(data["damping"][:, :, arm.nx:]).max() == 0.0
+    assert np.abs(data["damping"][:, : arm.nx, : arm.nx]).max() > 0.0
     assert data["A"].shape[0] == 3
     npz = np.load(save_linear_model(data, tmp_path / "m.npz"))
     np.testing.assert_array_equal(npz["A"], data["A"])

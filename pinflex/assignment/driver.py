@@ -444,6 +444,7 @@ def assign_frequencies(
             f"Taylor steps reached{floors_hz}: out of reach of these design variables within "
             "their bounds (widen them, add variables or lower the floors)",
             FloorsNotMet, stacklevel=2)
+    indicator = _motion_validity(model, trajectory, Q, after)
     return AssignmentResult(
         found=bool(answer.solution.found),
         design={d.name: float(v) for d, v in zip(model.design, answer.y)},
@@ -486,7 +487,28 @@ def assign_frequencies(
         constraints_met=constraints_met,
         status=status,
         iterations=tuple(history),
+        validity=indicator,
     )
+
+
+def _motion_validity(model, trajectory, Q, after):
+    """The validity indicator of eq. (1) along the trajectory, against the design after.
+
+    ``ω_1`` per sample is the lowest exact frequency the assignment solved there (targets,
+    floors, bands and reported modes); a warning says when the motion is too fast for the
+    frozen-pose modes the targets are set on (:mod:`pinflex.erls.validity`).
+    """
+    from pinflex.erls.validity import sample_rates, validity
+
+    times = np.asarray(trajectory.times_s, dtype=float)
+    if times.size < 2:
+        return None
+    cols = [np.asarray(after.freq_hz, dtype=float)]
+    if after.sorted_hz is not None:
+        cols.append(np.asarray(after.sorted_hz, dtype=float))
+    w1 = 2.0 * np.pi * np.nanmin(np.hstack(cols), axis=1)
+    qd, qdd = sample_rates(times, Q)
+    return validity(model, times, Q, qd, qdd, w1, what="the trajectory", basis="model")
 
 
 def _choose(seen: list[_Candidate], confirm_tol: float) -> _Candidate:

@@ -19,6 +19,7 @@ The command line exits with :data:`EXIT_NOT_MET` (3) unless the status is ``"met
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -89,6 +90,8 @@ class AssignmentResult:
         constraints_met: Whether floors, bands and the mass budget hold on the exact model
             (True when there are none).
         status: The outcome in one word (module docstring).
+        validity: The validity indicator of eq. (1) along the trajectory at the design after
+            (:class:`pinflex.erls.validity.Validity`), or None.
         iterations: One entry per QP solved: ``{"y", "gap", "cost", "violation",
             "accepted", "radius"}`` (exact cost of the targets, relative constraint
             violation, trust radius as a fraction of each variable's range).
@@ -126,6 +129,7 @@ class AssignmentResult:
     confirmed: bool = True
     constraints_met: bool = True
     status: str = "met"
+    validity: Any = None
     iterations: tuple = ()
 
     @property

@@ -81,6 +81,8 @@ def summary(result, total_s: float) -> dict:
         "taylor_order": int(result.taylor.order),
         "taylor_order_choice": _order_choice(result.taylor),
         "taylor_points_choice": _points_choice(result.taylor),
+        "validity": None if getattr(result, "validity", None) is None else
+        result.validity.summary(),
     }
 
 

@@ -25,7 +25,12 @@ def add_parser(sub) -> None:
     p.add_argument("--zeta", type=float, default=0.0,
                    help="modal damping ratio of every elastic mode (default 0)")
     p.add_argument("--rayleigh", type=float, nargs=2, metavar=("ALPHA", "BETA"),
-                   help="Rayleigh damping alpha M + beta K [1/s, s]")
+                   help="Rayleigh damping of the deformation [1/s, s]: every locked-joint mode "
+                   "decays at alpha/2 + beta omega^2/2, the rigid motion is not damped")
+    p.add_argument("--torque-input", choices=("motor", "generalized"), default="motor",
+                   help="linear model: motor (default): the actuator acts on both bodies of the "
+                   "joint (B = G^T, with the reaction on a flexible parent); generalized: the "
+                   "torque on the joint coordinate only")
     p.add_argument("--out", required=True,
                    help="output file: .npz or .mat (linear model), .xml (MJCF), .urdf")
     p.add_argument("--format", choices=("linear", "mjcf", "urdf"),
@@ -58,12 +63,14 @@ def cmd_export(args: argparse.Namespace) -> int:
         times = traj.times_s
     else:
         q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
-    data = linear_model(model, q, zeta=args.zeta, rayleigh=args.rayleigh)
+    data = linear_model(model, q, zeta=args.zeta, rayleigh=args.rayleigh,
+                        torque_input=args.torque_input)
     if times is not None:
         data["times_s"] = np.asarray(times)
     path = save_linear_model(data, args.out)
     shape = "x".join(str(s) for s in data["A"].shape)
     print(f"wrote {path}: A {shape}, {model.ndof} coordinates ({model.nx} elastic + "
-          f"{model.ndof - model.nx} joints), {model.nv} inputs (joint torques); "
+          f"{model.ndof - model.nx} joints), {model.nv} inputs ({args.torque_input} joint "
+          "torques); "
           f"joints {model.joint_switch}")
     return 0

@@ -1,4 +1,4 @@
-"""``pinflex simulate``: time simulation of the baseline and the assigned design of a study."""
+"""``pinflex simulate``: time simulation of a study's designs, or of a robot file along a motion."""
 
 from __future__ import annotations
 
@@ -9,14 +9,23 @@ import time
 from typing import Any
 
 from pinflex.cli.common import add_model_arguments, parse_values
+from pinflex.exceptions import ConfigurationError
 
 
 def add_parser(sub) -> None:
     """Register the ``simulate`` subcommand on an ``argparse`` subparsers object."""
     p = sub.add_parser(
-        "simulate", help="simulate the baseline and the assigned design of a study (eq. 1)")
+        "simulate", help="simulate a joint motion of an arm (eq. 1): a study's baseline and "
+        "assigned designs, or a robot file along a trajectory CSV")
     p.add_argument("config", help="study TOML of 'pinflex assign' with a [simulation] table "
-                   "(see pinflex.dynamics.study)")
+                   "(see pinflex.dynamics.study; without [[targets]] the model at its values "
+                   "is simulated, no assignment), or an annotated URDF / overlay with "
+                   "--trajectory")
+    p.add_argument("--trajectory", metavar="CSV", default=None,
+                   help="joint trajectory (header: t, joint names): required with a robot "
+                   "file; with a study, replaces its [trajectory]")
+    p.add_argument("--planar", action="store_true",
+                   help="with a robot file: keep in-plane elastic dofs only")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="folder for the charts and the time series (JSON)")
@@ -27,40 +36,118 @@ def add_parser(sub) -> None:
                    help="prescribed drive: halve the time step until the Richardson estimate of "
                    "its error (relative to the largest elastic coordinate) is at most TOL; "
                    "overrides the study's [simulation] tol")
+    g = p.add_argument_group("simulation settings (override the study's [simulation] keys)")
+    g.add_argument("--drive", choices=("prescribed", "torque"), default=None,
+                   help="prescribed joint motion (default) or computed torque + PD")
+    g.add_argument("--after", type=float, default=None, metavar="S",
+                   help="simulated time after the last trajectory sample [s] (default 0.5)")
+    g.add_argument("--gravity", type=float, nargs=3, default=None, metavar=("GX", "GY", "GZ"),
+                   help="gravity in world axes [m/s^2] (default none)")
+    g.add_argument("--rayleigh", type=float, nargs=2, default=None, metavar=("ALPHA", "BETA"),
+                   help="Rayleigh damping alpha [1/s], beta [s] (pinflex.dynamics.damping)")
+    g.add_argument("--modal-damping", type=float, nargs="+", default=None, metavar="RATIO",
+                   help="modal damping ratios of the lowest locked-joint modes")
+    g.add_argument("--frame", default=None, metavar="LINK",
+                   help="output link (default 'tool')")
+    g.add_argument("--point", type=float, nargs=3, default=None, metavar=("X", "Y", "Z"),
+                   help="output point on the frame's link [m]")
+    g.add_argument("--sample-hz", type=float, default=None, metavar="HZ",
+                   help="output rate [Hz] (default 5000)")
+    g.add_argument("--terms", choices=("eq1", "full"), default=None,
+                   help="prescribed drive: eq1 (paper 000 eq. 1, default) or full (adds the "
+                   "centrifugal, Euler and geometric-stiffness terms of a fast motion)")
+    g.add_argument("--strict", action="store_true", default=None,
+                   help="refuse a motion too fast for eq. (1) (validity indicator above its "
+                   "threshold) instead of warning")
     add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_simulate)
 
 
+def simulation_overrides(args: argparse.Namespace) -> dict:
+    """The ``[simulation]`` keys given on the command line (checked with the study's)."""
+    out: dict[str, Any] = {}
+    for key, name in (("drive", "drive"), ("after_s", "after"), ("frame", "frame"),
+                      ("sample_hz", "sample_hz"), ("terms", "terms"), ("strict", "strict")):
+        if getattr(args, name, None) is not None:
+            out[key] = getattr(args, name)
+    for key in ("gravity", "point"):
+        if getattr(args, key, None) is not None:
+            out[key] = list(getattr(args, key))
+    if getattr(args, "rayleigh", None) is not None and getattr(args, "modal_damping", None):
+        raise ConfigurationError("give --rayleigh or --modal-damping, not both")
+    if getattr(args, "rayleigh", None) is not None:
+        out["damping"] = {"kind": "rayleigh", "alpha": args.rayleigh[0],
+                          "beta": args.rayleigh[1]}
+    elif getattr(args, "modal_damping", None):
+        out["damping"] = {"kind": "modal", "ratios": list(args.modal_damping)}
+    return out
+
+
+def _is_study(path: str) -> bool:
+    return str(path).lower().endswith(".toml")
+
+
 def run_study(path, joints: str | None = None, values: dict[str, float] | None = None,
-              tol: float | None = None) -> tuple[list, list, Any, Any]:
-    """Assign the study's design, then simulate the baseline and the assigned design.
+              tol: float | None = None, *, trajectory: str | None = None,
+              planar: bool = False, simulation: dict | None = None,
+              ) -> tuple[list, list, Any, Any]:
+    """Simulate a study's designs (after its assignment), or a robot file along a trajectory.
+
+    Everything the drive refuses (a locked joint the trajectory turns, a locked joint under
+    the torque drive, an unknown output link) is checked before the assignment runs.
 
     Args:
-        path: Study TOML with a ``[simulation]`` table.
+        path: Study TOML (``[simulation]`` table; ``[[targets]]`` optional), or a robot file
+            (annotated URDF or overlay) with ``trajectory``.
         joints: Joint conditions overriding the study's ``joints`` key (``--joints``).
         values: Parameter values overriding and adding to the study's ``values`` (``--set``).
         tol: Step-error tolerance overriding the study's ``tol`` (``--tol``).
+        trajectory: Trajectory CSV (required with a robot file; replaces a study's).
+        planar: With a robot file: in-plane elastic dofs only.
+        simulation: ``[simulation]`` keys overriding the study's (checked with them).
 
     Returns:
-        ``(reports, [(simulation, dynamics)], settings, assignment result)``.
+        ``(reports, [(simulation, dynamics)], settings, assignment result or None)``: the
+        baseline and assigned designs of a study with targets, else one design ``"design"``.
     """
-    from pinflex.assignment.study import run_config
-    from pinflex.dynamics.study import load_simulation_study, simulate_design
+    from pathlib import Path
 
-    cfg, settings = load_simulation_study(path)
+    from pinflex.assignment.study import AssignmentConfig, resolve, run_config
+    from pinflex.dynamics.study import (
+        check_drive,
+        load_simulation_study,
+        parse_simulation_table,
+        simulate_design,
+    )
+
+    overrides = dict(simulation or {})
     if tol is not None:
-        import dataclasses
-
-        from pinflex.dynamics.study import parse_simulation_table
-
-        parse_simulation_table({"tol": tol})  # the same checks as in the file
-        settings = dataclasses.replace(settings, tol=float(tol))
+        overrides["tol"] = tol
+    if _is_study(path):
+        cfg, settings = load_simulation_study(path, overrides)
+    else:
+        if trajectory is None:
+            raise ConfigurationError(
+                f"'{path}' is a robot file: give the motion with --trajectory CSV (or a study "
+                "TOML with a [simulation] table)")
+        cfg = AssignmentConfig(robot=resolve(str(path), Path.cwd()), planar=planar,
+                               trajectory={}, targets=[])
+        settings = parse_simulation_table(overrides)
+    if trajectory is not None:
+        cfg.trajectory = {"csv": str(Path(trajectory).resolve())}
     if joints is not None:
         cfg.joints = joints
     if values:
         cfg.values = {**(cfg.values or {}), **values}
-    model, traj, result = run_config(cfg)
-    designs = [("baseline", result.y_before), ("assigned", result.y)]
+    model = cfg.build_model()
+    traj = cfg.build_trajectory(model)
+    check_drive(model, traj, settings)
+    result = None
+    if cfg.targets:
+        model, traj, result = run_config(cfg, model=model, trajectory=traj)
+        designs = [("baseline", result.y_before), ("assigned", result.y)]
+    else:
+        designs = [("design", None)]
     reports, sims = [], []
     for name, y in designs:
         rep, sim, dyn = simulate_design(model, traj, y, settings, name)
@@ -73,7 +160,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     """Run ``pinflex simulate``."""
     t0 = time.perf_counter()
     reports, sims, settings, result = run_study(
-        args.config, args.joints, parse_values(args.set) if args.set else None, args.tol)
+        args.config, args.joints, parse_values(args.set) if args.set else None, args.tol,
+        trajectory=args.trajectory, planar=args.planar, simulation=simulation_overrides(args))
     total = time.perf_counter() - t0
     files: list[str] = []
     if args.out:
@@ -82,10 +170,18 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         out = output_dir(args.out)
         files.append(str(deflection_chart(reports, out / "tip_deflection.png")))
-        for rep in reports:
+        named = [(rep.name, sim.validity) for rep, (sim, _) in zip(reports, sims)
+                 if sim.validity is not None]
+        if named:
+            from pinflex.dynamics.charts import validity_chart
+
+            files.append(str(validity_chart(named, out / "validity.png")))
+        for rep, (sim, _) in zip(reports, sims):
             p = out / f"{rep.name}_series.json"
             write_text(p, rep.to_json(series=True), "simulation JSON")
             files.append(str(p))
+            if sim.validity is not None:
+                files.append(str(sim.validity.write_csv(out / f"{rep.name}_validity.csv")))
         if args.exaggeration > 0:
             playback: Any = None
             try:
@@ -108,6 +204,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             "step_error_estimate": d.get("error_estimate"),
             "residual_joint_condition": d["joint_condition"],
             "residual_reference_hz": d["reference_hz"], "frame": d["frame"],
+            "terms": d.get("terms", "eq1"), "validity": d.get("validity"),
         })
     out_json = {"drive": settings.drive, "designs": designs, "files": files,
                 "total_time_s": total}
@@ -123,6 +220,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
           f"{1e3 * d['tip_rms_m']:.4f} mm, residual {1e3 * d['residual_amplitude_m']:.4f} mm at "
           f"{'-' if f is None else f'{f:.3f}'} Hz (reference "
           f"{d['residual_reference_hz'][0]:.3f} Hz); {d['steps']} steps, {d['time_s']:.2f} s\n")
+        v = d["validity"]
+        if v is not None:
+            w(f"            validity of eq. (1): |omega|^2/omega_1^2 = {v['max_speed_ratio']:.3g}"
+              f", |alpha|/omega_1^2 = {v['max_accel_ratio']:.3g} (threshold "
+              f"{v['threshold']:g}{'; EXCEEDED' if v['exceeded'] else ''}); terms "
+              f"{d['terms']}\n")
     for f in files:
         w(f"wrote {f}\n")
     return 0

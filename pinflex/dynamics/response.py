@@ -48,6 +48,9 @@ class VibrationReport:
         error_estimate: Richardson estimate of the time-step error of a prescribed motion
             (``Simulation.error_estimate``; NaN for the adaptive integrators).
         y: Design values [kg] by name; final_q: final ERLS joint coordinates (user convention).
+        validity: The validity indicator's summary
+            (:meth:`pinflex.erls.validity.Validity.summary`), or None.
+        terms: ``"eq1"`` or ``"full"``: the terms simulated.
     """
 
     name: str
@@ -67,6 +70,8 @@ class VibrationReport:
     y: dict
     final_q: tuple[float, ...]
     error_estimate: float = float("nan")
+    validity: dict | None = None
+    terms: str = "eq1"
 
     def summary(self) -> dict:
         """The JSON-ready metrics (no time series)."""
@@ -242,6 +247,8 @@ def vibration_report(dyn, sim, *, name: str = "design", frame: str = "tool",
         steps=sim.steps, time_s=sim.time_s, error_estimate=float(sim.error_estimate),
         y={d.name: float(v) for d, v in zip(dyn.model.design, dyn.y)},
         final_q=tuple(float(v) for v in sim.q[-1]),
+        validity=None if getattr(sim, "validity", None) is None else sim.validity.summary(),
+        terms=getattr(sim, "terms", "eq1"),
     )
 
 
@@ -251,6 +258,53 @@ def locked_system(dyn, q):
     A = dyn.joint_offsets(q)[0]
     Z = np.vstack([np.eye(dyn.nx), A])
     return Z.T @ M @ Z, Z.T @ K @ Z, Z.T @ (F - K[:, dyn.nx:] @ np.asarray(q, float)), A
+
+
+def locked_validity(dyn, times_s, q, qd, qdd, *, terms: str = "eq1", strict: bool = False,
+                    threshold: float | None = None, n_modes: int = 3,
+                    what: str = "the motion"):
+    """The validity indicator of eq. (1) along a joint motion, against the locked modes.
+
+    The lowest ``n_modes`` locked-joint eigenfrequencies (eq. 1's, the joints held by their
+    motors) are solved at 200 of the samples at most and interpolated linearly between (they
+    change slowly with the pose); the indicator is :func:`pinflex.erls.validity.validity`
+    with them. Locked frequencies are the lowest a held arm rings at, so for a servo-held or
+    torque-driven arm the indicator errs on the side of warning.
+
+    Args:
+        dyn: The :class:`ErlsDynamics`.
+        times_s: Sample times (n,) [s].
+        q: Joint coordinates (n, nv), user convention; ``qd``, ``qdd`` their rates.
+        qd: Joint velocities (n, nv).
+        qdd: Joint accelerations (n, nv).
+        terms: ``"full"``: reported, never warned about or refused (the terms are in).
+        strict: Refuse above the threshold (``terms="eq1"``).
+        threshold: Warning threshold (default :data:`pinflex.erls.validity.VALIDITY_THRESHOLD`).
+        n_modes: Modes per sample.
+        what: Name of the motion in the message.
+
+    Returns:
+        :class:`pinflex.erls.validity.Validity`.
+    """
+    import scipy.linalg
+
+    from pinflex.erls.validity import VALIDITY_THRESHOLD, validity
+
+    t = np.asarray(times_s, dtype=float)
+    q, qd, qdd = (np.atleast_2d(np.asarray(v, dtype=float)) for v in (q, qd, qdd))
+    k = max(1, min(int(n_modes), dyn.nx))
+    at = np.unique(np.linspace(0, t.size - 1, min(t.size, 200)).round().astype(int))
+    wa = np.empty((at.size, k))
+    for n, i in enumerate(at):
+        Mr, Kr, _, _ = locked_system(dyn, q[i])
+        lam = scipy.linalg.eigh(Kr, Mr, eigvals_only=True, subset_by_index=[0, k - 1])
+        wa[n] = np.sqrt(np.clip(lam, 0.0, None))
+    w = wa if at.size == t.size else np.column_stack(
+        [np.interp(t, t[at], wa[:, j]) for j in range(k)])
+    return validity(dyn.model, t, q, qd, qdd, w,
+                    threshold=VALIDITY_THRESHOLD if threshold is None else threshold,
+                    strict=strict and terms == "eq1", warn=terms == "eq1", what=what,
+                    basis="locked")
 
 
 def locked_frequencies(dyn, q) -> np.ndarray:

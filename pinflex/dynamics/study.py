@@ -22,9 +22,15 @@ Example (all keys optional; the defaults shown)::
                                 # of step_s and step_s / 2, Richardson-extrapolated
     kp = 0.0                    # torque drive: PD gains on the motor angles [N m/rad]
     kd = 0.0                    #               [N m s/rad]
+    terms = "eq1"               # prescribed drive: or "full" (centrifugal, Euler and
+                                # geometric-stiffness terms; pinflex.dynamics.speed)
+    strict = false              # refuse a motion too fast for eq. (1) (validity indicator
+                                # above validity_threshold) instead of warning
+    validity_threshold = 0.1    # pinflex.erls.validity
 
-The study simulates the baseline design (``[options] baseline``, default the lower bounds) and
-the design the assignment finds.
+With ``[[targets]]``, the study simulates the baseline design (``[options] baseline``, default
+the lower bounds) and the design the assignment finds; without them, the model at its values
+(``values``), with no assignment.
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pinflex.dynamics.simulate import Damping
+from pinflex.dynamics.damping import Damping
 from pinflex.exceptions import ConfigurationError
 
 
@@ -64,6 +70,9 @@ class SimulationSettings:
     step_s: float | None = None
     kp: float = 0.0
     kd: float = 0.0
+    terms: str = "eq1"
+    strict: bool = False
+    validity_threshold: float = 0.1
 
 
 _NUMBERS = {  # key: (lower, upper, lower inclusive)
@@ -76,6 +85,7 @@ _NUMBERS = {  # key: (lower, upper, lower inclusive)
     "step_s": (0.0, math.inf, True),
     "kp": (0.0, math.inf, True),
     "kd": (0.0, math.inf, True),
+    "validity_threshold": (0.0, math.inf, False),
 }
 
 
@@ -94,7 +104,7 @@ def parse_simulation_table(table) -> SimulationSettings:
     if not isinstance(table, dict):
         raise InvalidSimulationTable([f"must be a table, got {type(table).__name__}"])
     problems: list[str] = []
-    known = {"drive", "damping", "gravity", "frame", "point", *_NUMBERS}
+    known = {"drive", "damping", "gravity", "frame", "point", "terms", "strict", *_NUMBERS}
     for k in sorted(set(table) - known):
         problems.append(f"unknown key '{k}' (known: {', '.join(sorted(known))})")
     out: dict = {}
@@ -113,6 +123,16 @@ def parse_simulation_table(table) -> SimulationSettings:
             problems.append(f"{k} = {v!r} must lie in {'[' if inclusive else '('}{lo:g}, {hi:g}]")
         else:
             out[k] = float(v)
+    if "terms" in table:
+        if table["terms"] not in ("eq1", "full"):
+            problems.append(f"terms = {table['terms']!r} must be 'eq1' or 'full'")
+        else:
+            out["terms"] = table["terms"]
+    if "strict" in table:
+        if not isinstance(table["strict"], bool):
+            problems.append(f"strict = {table['strict']!r} must be true or false")
+        else:
+            out["strict"] = table["strict"]
     for k in ("gravity", "point"):
         if k in table:
             v = table[k]
@@ -156,6 +176,9 @@ def parse_simulation_table(table) -> SimulationSettings:
                                          float(d.get("beta", 0.0)), tuple(map(float, ratios)))
         else:
             problems.append(f"damping = {d!r} must be 'none' or a table with kind = ...")
+    if out.get("drive") == "torque" and out.get("terms") == "full":
+        problems.append("terms = 'full' is for drive = 'prescribed' (the torque drive "
+                        "integrates eq. (1))")
     if out.get("drive") == "torque" and isinstance(out.get("damping"), Damping) and \
             out["damping"].kind == "modal":
         problems.append("drive = 'torque' takes Rayleigh damping or none")
@@ -164,8 +187,14 @@ def parse_simulation_table(table) -> SimulationSettings:
     return SimulationSettings(**out)
 
 
-def load_simulation_study(path: str | Path):
-    """``(assignment config, simulation settings)`` of a study file."""
+def load_simulation_study(path: str | Path, overrides: dict | None = None):
+    """``(assignment config, simulation settings)`` of a study file.
+
+    Args:
+        path: Study TOML.
+        overrides: ``[simulation]`` keys replacing the file's (command-line options), checked
+            with them.
+    """
     from pinflex.assignment.study import load_config
 
     path = Path(path)
@@ -175,22 +204,50 @@ def load_simulation_study(path: str | Path):
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ConfigurationError(f"'{path}' is not valid TOML: {exc}") from exc
-    settings = parse_simulation_table(data.get("simulation"))
+    table = data.get("simulation")
+    if overrides:
+        table = {**(table if isinstance(table, dict) else {}), **overrides}
+    settings = parse_simulation_table(table)
     return load_config(path), settings
+
+
+def check_drive(model, trajectory, settings: SimulationSettings) -> None:
+    """What the drive refuses, checked before any work (the assignment of a study).
+
+    Raises:
+        ConfigurationError: The prescribed drive turns a locked joint, the torque drive meets
+            a locked joint, or the output frame is not a link of the robot.
+    """
+    from pinflex.dynamics.prescribed import check_locked_motion
+
+    model.description.require_link(settings.frame)
+    if settings.drive == "prescribed":
+        check_locked_motion(model, trajectory)
+        return
+    locked = [c.name for c in model.joint_conditions if c.kind == "locked"]
+    if locked:
+        raise ConfigurationError(
+            f"drive = 'torque' integrates every joint coordinate; joints {locked} are locked in "
+            "this model: model a brake as a stiff spring (joints={name: stiffness}), or hold "
+            "the joints with the prescribed drive (drive = 'prescribed', the trajectory "
+            "constant in them)")
 
 
 def simulate_design(model, trajectory, y, settings: SimulationSettings, name: str):
     """Simulate one design of a study; returns ``(report, simulation, dynamics)``."""
+    from pinflex.dynamics.prescribed import simulate_prescribed
     from pinflex.dynamics.response import vibration_report
-    from pinflex.dynamics.simulate import simulate_prescribed, simulate_torque
     from pinflex.dynamics.terms import ErlsDynamics
+    from pinflex.dynamics.torque import simulate_torque
 
     model.description.require_link(settings.frame)
     dyn = ErlsDynamics(model, y=y, gravity=list(settings.gravity))
     if settings.drive == "prescribed":
         sim = simulate_prescribed(dyn, trajectory, after_s=settings.after_s,
                                   damping=settings.damping, sample_hz=settings.sample_hz,
-                                  rho_inf=settings.rho_inf, tol=settings.tol)
+                                  rho_inf=settings.rho_inf, tol=settings.tol,
+                                  terms=settings.terms, strict=settings.strict,
+                                  validity_threshold=settings.validity_threshold)
     else:
         from pinflex.dynamics.motion import JointMotion
 
@@ -201,6 +258,7 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
                               sample_hz=settings.sample_hz, rtol=settings.rtol,
                               atol=settings.atol,
                               rho_inf=0.9 if settings.rho_inf is None else settings.rho_inf,
-                              step_s=settings.step_s or None)
+                              step_s=settings.step_s or None, strict=settings.strict,
+                              validity_threshold=settings.validity_threshold)
     rep = vibration_report(dyn, sim, name=name, frame=settings.frame, xyz=settings.point)
     return rep, sim, dyn

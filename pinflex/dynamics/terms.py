@@ -46,27 +46,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from pinflex import beam
+from pinflex.dynamics.carriers import Carriers, build_carriers
 from pinflex.erls.plan import attachment
 from pinflex.erls.terms import joint_step, joint_step_rate
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
-
-_GX, _GW = np.polynomial.legendre.leggauss(4)
-_GXI, _GWXI = 0.5 * (_GX + 1.0), 0.5 * _GW
-
-
-@dataclass(frozen=True)
-class _Carriers:
-    """Material points (or rotational carriers) of one link."""
-
-    link: str
-    c: np.ndarray  # (n, 3) positions in the link frame [m]
-    X: np.ndarray  # (n, 3, 6) X(c) = [I, -[c]x] (translational) or [0, I] (rotational)
-    C: np.ndarray  # (n, 3, nx) constant part of the elastic map (link axes)
-    D: np.ndarray | None  # (n, 3, 6) map of the link root twist, or None
-    mass: np.ndarray  # (n,) [kg] or (n, 3, 3) [kg m²] for rotational carriers
-    design: np.ndarray  # (n,) index of the design variable setting the mass, or -1
 
 
 @dataclass(frozen=True)
@@ -112,10 +96,12 @@ class ErlsDynamics:
             DesignVariableNotFound: A dict key of ``y`` is not a design variable.
             DesignVariableOutOfBounds: A design value leaves its bounds.
         """
-        self.model = model
-        self.y = model.check_y(y)
-        if self.y.ndim != 1:
+        y = model.check_y(y)
+        if y.ndim != 1:
             raise ConfigurationError("ErlsDynamics takes one design vector (ny,)")
+        #: the model at design ``y`` (sections, materials, springs and masses from ``y``)
+        self.model = model = design_model(model, y)
+        self.y = y
         g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ConfigurationError(f"gravity must be 3 finite numbers [m/s²], got {gravity!r}")
@@ -125,7 +111,7 @@ class ErlsDynamics:
         self.nx, self.nv = model.nx, model.nv
         self.ndof = self.nx + self.nv
         self._pdata = model.model.createData()
-        self._points, self._rotors = _build_carriers(model, self.y)
+        self._points, self._rotors = build_carriers(model, self.y)
         self._links = sorted({c.link for c in self._points} | {c.link for c in self._rotors},
                              key=model.plan.links.index)
         #: whether the joint offsets A(q) change with the pose (a joint on an element-0 point
@@ -155,13 +141,13 @@ class ErlsDynamics:
         Jd = {link: np.zeros((self.nv, 6, self.nv)) for link in self._links}
         for link in self._links:
             fid = model.plan.frame_ids[link]
-            J[link] = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ Cm
+            J[link] = _jac(pin.getFrameJacobian(pm, pd, fid, pin.LOCAL), self.nv) @ Cm
             R[link] = pd.oMf[fid].rotation.copy()
         for k in range(self.nv):
             pin.computeJointJacobiansTimeVariation(pm, pd, qp, Cm[:, k].copy())
             for link in self._links:
-                Jd[link][k] = pin.getFrameJacobianTimeVariation(
-                    pm, pd, model.plan.frame_ids[link], pin.LOCAL) @ Cm
+                Jd[link][k] = _jac(pin.getFrameJacobianTimeVariation(
+                    pm, pd, model.plan.frame_ids[link], pin.LOCAL), self.nv) @ Cm
         e, ed = self._root_twists(q)
         return J, Jd, R, e, ed
 
@@ -176,7 +162,7 @@ class ErlsDynamics:
         self._rt_last = (key, out)
         return out
 
-    def _maps(self, p: _Carriers, J, Jd, e, ed):
+    def _maps(self, p: Carriers, J, Jd, e, ed):
         """``W = [E, S]``, and per unit joint velocity ``G_k`` and ``Ṡ_k`` of a carrier group."""
         JL = J[p.link]
         el, edl = e.get(p.link), ed.get(p.link)
@@ -357,7 +343,7 @@ class ErlsDynamics:
             pin.computeJointJacobians(pm, pd, model.pin_configuration(q))
             pin.updateFramePlacements(pm, pd)
             Rw = rotate_twist(pd.oMf[fid].rotation)
-            JL = pin.getFrameJacobian(pm, pd, fid, pin.LOCAL) @ model.coord_map
+            JL = _jac(pin.getFrameJacobian(pm, pd, fid, pin.LOCAL), model.nv) @ model.coord_map
             el = self._root_twists(q)[0].get(link)
             T = np.zeros((6, model.nx)) if att.const is None else att.const.copy()
             if att.lin is not None and el is not None:
@@ -365,6 +351,31 @@ class ErlsDynamics:
             return Rw @ T, Rw @ (Xp @ JL)
 
         return at
+
+
+
+def design_model(model, y: np.ndarray):
+    """The model whose properties are those of design ``y`` (``model`` itself at its nominal).
+
+    Every property a design parameter sets (section dimensions, material constants, joint
+    spring stiffnesses, point masses referencing a parameter) is read from a model built at
+    ``y``, through the same description route as :meth:`FlexibleModel.matrices`, so the
+    dynamics and the modal analysis of one design agree. Design point masses are read from
+    ``y`` by the carriers.
+
+    Args:
+        model: The :class:`~pinflex.FlexibleModel`.
+        y: Design values (ny,), checked.
+
+    Returns:
+        ``model`` when no design parameter leaves its nominal value, else a model at ``y``.
+    """
+    params = {d.name: float(v) for d, v in zip(model.design, y)
+              if d.kind == "parameter" and float(v) != float(d.nominal)}
+    if not params:
+        return model
+    return model.with_values(params)
+
 
 
 def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
@@ -403,93 +414,9 @@ def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
     return tw, rate
 
 
-# ---------------------------------------------------------------------- set-up
-def _xmap(c: np.ndarray) -> np.ndarray:
-    out = np.zeros(c.shape[:-1] + (3, 6))
-    out[..., :, :3] = np.eye(3)
-    out[..., :, 3:] = -skew(c)
-    return out
+
+def _jac(J, nv: int) -> np.ndarray:
+    """A Pinocchio frame Jacobian as (6, nv): for one joint Pinocchio returns a (6,) vector."""
+    return np.asarray(J).reshape(6, nv)
 
 
-def _build_carriers(model, y: np.ndarray):
-    desc = model.description
-    nx = model.nx
-    design_index = {d.name: i for i, d in enumerate(model.design)}
-    points: list[_Carriers] = []
-    rotors: list[_Carriers] = []
-    for link, plan in model.plan.beams.items():
-        spec = plan.spec
-        n = spec.elements
-        le = spec.length_m / n
-        shape = beam.shape_matrix(le, _GXI)  # (4, 6, 12) beam axes
-        rb = spec.rotation
-        cs, Cs, Ds, ms, Crs, Drs, Irs = [], [], [], [], [], [], []
-        ex = rb[:, 0]
-        for el in range(n):
-            rows = slice(6 * el, 6 * el + 12)
-            for g in range(_GXI.size):
-                Nt = rb @ shape[g, :3]
-                Nr = rb @ shape[g, 3:]
-                cs.append((el + _GXI[g]) / n * spec.tip)
-                Cs.append(Nt @ plan.sel[rows])
-                Ds.append(Nt @ plan.root[rows])
-                ms.append(spec.rhoA * le * _GWXI[g])
-                Crs.append(Nr @ plan.sel[rows])
-                Drs.append(Nr @ plan.root[rows])
-                Irs.append(spec.rhoIp * le * _GWXI[g] * np.outer(ex, ex))
-        c = np.array(cs)
-        points.append(_Carriers(link, c, _xmap(c), np.array(Cs), np.array(Ds),
-                                np.array(ms), -np.ones(len(ms), dtype=int)))
-        if spec.rhoIp > 0.0 and not model.planar:
-            rx = np.zeros((len(Irs), 3, 6))
-            rx[:, :, 3:] = np.eye(3)
-            rotors.append(_Carriers(link, c, rx, np.array(Crs), np.array(Drs),
-                                    np.array(Irs), -np.ones(len(Irs), dtype=int)))
-    for link in model.plan.inertias:
-        ine = desc.inertias[link]
-        c, m = _equivalent_points(ine.mass, ine.com, ine.inertia)
-        X = _xmap(c)
-        points.append(_Carriers(link, c, X, np.zeros((c.shape[0], 3, nx)), X, m,
-                                -np.ones(m.size, dtype=int)))
-    for pm in model.plan.point_masses:
-        name, link, xyz, att = pm.name, pm.link, pm.xyz, pm.attach
-        d = design_index.get(name, -1)
-        mass = y[d] if d >= 0 else model.point_mass_values[name]
-        C = np.zeros((1, 3, nx)) if att.const is None else att.const[None, :3]
-        D = None if att.lin is None else att.lin[None, :3]
-        points.append(_Carriers(link, np.asarray(xyz, float)[None], _xmap(np.asarray(
-            xyz, float)[None]), C, D, np.array([float(mass)]), np.array([d])))
-    return _merge(points), _merge(rotors)
-
-
-def _merge(groups: list[_Carriers]) -> list[_Carriers]:
-    """One carrier group per link (missing root maps become zeros)."""
-    out = []
-    for link in dict.fromkeys(g.link for g in groups):
-        gs = [g for g in groups if g.link == link]
-        Ds = [np.zeros(g.C.shape[:2] + (6,)) if g.D is None else g.D for g in gs]
-        out.append(_Carriers(
-            link, np.concatenate([g.c for g in gs]), np.concatenate([g.X for g in gs]),
-            np.concatenate([g.C for g in gs]), np.concatenate(Ds),
-            np.concatenate([g.mass for g in gs]), np.concatenate([g.design for g in gs])))
-    return out
-
-
-def _equivalent_points(mass: float, com: np.ndarray, inertia: np.ndarray):
-    """Seven points (signed masses) with the given mass, centre of mass and inertia tensor.
-
-    The second moment ``Q = ½ tr(I) 𝟙 − I`` about the centre of mass is reproduced by pairs of
-    points at ``± r_k`` along its principal axes; the centre point takes the rest of the mass.
-    """
-    Q = 0.5 * np.trace(inertia) * np.eye(3) - inertia
-    qk, V = np.linalg.eigh(0.5 * (Q + Q.T))
-    scale = max(np.sqrt(max(np.trace(inertia), 0.0) / max(mass, 1e-300)), 1e-3)
-    pts = [np.asarray(com, dtype=float)]
-    masses = []
-    for k in range(3):
-        mk = qk[k] / (2.0 * scale**2)
-        for s in (1.0, -1.0):
-            pts.append(com + s * scale * V[:, k])
-            masses.append(mk)
-    masses.insert(0, mass - sum(masses))
-    return np.array(pts), np.array(masses)

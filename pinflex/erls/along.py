@@ -15,7 +15,7 @@ import csv
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -40,6 +40,9 @@ class ModesAlong:
         events: Crossings, veerings and ambiguous steps, as dictionaries
             (``kind``, ``sample``, ``time_s``, ``modes``, ``freq_hz``, ``mac``).
         design: Design values used ``{name: kg}``.
+        validity: The validity indicator of eq. (1) along the motion
+            (:class:`pinflex.erls.validity.Validity`, against the lowest tracked modes'
+            sorted frequencies), or None.
     """
 
     robot: str
@@ -53,6 +56,7 @@ class ModesAlong:
     mac_step: np.ndarray
     events: tuple[dict, ...]
     design: dict
+    validity: Any = None
 
     @property
     def n_samples(self) -> int:
@@ -64,6 +68,8 @@ class ModesAlong:
         cols = ["t", *self.joint_names]
         for m in self.modes:
             cols += [f"mode{m}_hz", f"sorted{m}_hz", f"mode{m}_order", f"mode{m}_mac"]
+        if self.validity is not None:
+            cols += ["speed_ratio", "accel_ratio"]
         return cols
 
     def to_csv(self, path: str | Path) -> Path:
@@ -79,6 +85,9 @@ class ModesAlong:
                 for c in range(len(self.modes)):
                     row += [repr(float(self.freq_hz[s, c])), repr(float(self.sorted_hz[s, c])),
                             str(int(self.order[s, c])), repr(float(self.mac_step[s, c]))]
+                if self.validity is not None:
+                    row += [repr(float(self.validity.speed_ratio[s, 0])),
+                            repr(float(self.validity.accel_ratio[s, 0]))]
                 w.writerow(row)
         return path
 
@@ -97,6 +106,7 @@ class ModesAlong:
             "mac_step": self.mac_step.tolist(),
             "events": [dict(e) for e in self.events],
             "summary": self.summary(),
+            "validity": None if self.validity is None else self.validity.summary(),
         }
 
     def to_json(self) -> str:
@@ -138,6 +148,12 @@ class ModesAlong:
                 )
         else:
             lines.append("no crossings or veerings among the tracked modes")
+        v = self.validity
+        if v is not None:
+            lines.append(
+                f"validity of eq. (1): |omega|^2/omega_1^2 = {v.max_speed_ratio:.3g}, "
+                f"|alpha|/omega_1^2 = {v.max_accel_ratio:.3g} (threshold {v.threshold:g}"
+                f"{'; EXCEEDED: the modes of the moving arm differ' if v.exceeded else ''})")
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -196,6 +212,8 @@ def modes_along(
     modes=3,
     extra: int = 3,
     check_limits: Literal["warn", "raise"] | None = "warn",
+    strict: bool = False,
+    validity_threshold: float | None = None,
 ) -> ModesAlong:
     """Tracked eigenfrequencies of ``arm`` along ``trajectory``.
 
@@ -208,9 +226,15 @@ def modes_along(
             a higher one and still be followed.
         check_limits: ``"warn"``, ``"raise"`` or ``None``: what to do with samples outside
             the URDF joint limits.
+        strict: Refuse (:class:`~pinflex.exceptions.ModelValidityError`) a motion whose
+            validity indicator (:mod:`pinflex.erls.validity`; rates from the samples by
+            finite differences) is above ``validity_threshold``; otherwise warn
+            (:class:`~pinflex.exceptions.ModelValidityWarning`): the frozen-pose modes are
+            not those of the moving arm there (:func:`pinflex.dynamics.modes_at_speed`).
+        validity_threshold: Default :data:`pinflex.erls.validity.VALIDITY_THRESHOLD`.
 
     Returns:
-        :class:`ModesAlong`.
+        :class:`ModesAlong` (``validity`` set for two samples or more).
     """
     from pinflex.erls.tracking import track_modes
     from pinflex.trajectory.cartesian import check_joint_limits
@@ -242,6 +266,16 @@ def modes_along(
     )
     yv = arm.check_y(y)
     design = {d.name: float(v) for d, v in zip(arm.design, np.atleast_2d(yv)[0])}
+    indicator = None
+    if times.size >= 2:
+        from pinflex.erls.validity import VALIDITY_THRESHOLD, sample_rates, validity
+
+        qd, qdd = sample_rates(times, Q)
+        omega = 2.0 * np.pi * sorted_all[:, :3]
+        indicator = validity(
+            arm, times, Q, qd, qdd, omega, strict=strict, what="the trajectory",
+            threshold=VALIDITY_THRESHOLD if validity_threshold is None else validity_threshold,
+            basis="model")
     return ModesAlong(
         robot=arm.description.name,
         times_s=times,
@@ -255,4 +289,5 @@ def modes_along(
         mac_step=np.asarray(tr.mac_step),
         events=events,
         design=design,
+        validity=indicator,
     )

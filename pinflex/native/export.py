@@ -7,9 +7,15 @@ At a pose ``q`` (at rest, ``q̇ = 0``, no gravity) the ERLS equations of small m
 with ``x`` the elastic nodal coordinates (``arm.x_names``: ``<link>.n<k>.<u|r><x|y|z>``, small
 translations [m] and rotations [rad] of beam node k in the beam axes of its link) and ``q`` the
 joint coordinates (``arm.joint_names``, the arm's convention), and ``τ`` the joint torques
-(forces for prismatic joints) acting on the joint coordinates: ``Bᵤ = [0; I_nv]`` in relative
-coordinates (for absolute ones, ``Bᵤ = [0; Cᵀ]`` with ``q_rel = C q_abs``, so that ``τ`` still
-acts on each joint).
+(forces for prismatic joints). By default (``torque_input="motor"``) ``τ`` is a **motor
+torque**: the actuator acts on both bodies of the joint, doing work on the joint's physical
+relative motion ``r = G p`` (between the parent's deformed attachment and the child,
+:meth:`~pinflex.FlexibleModel.relative_motion_rows`), so ``Bᵤ = Gᵀ``: it loads the joint
+coordinate and, through the elastic offset of the attachment, the parent's deformation (the
+stator's reaction), as ``pinflex.dynamics`` (simulation and receptances) reads a joint torque.
+``torque_input="generalized"`` gives the generalized-coordinate reading ``Bᵤ = [0; I_nv]``
+(relative coordinates; ``[0; Cᵀ]`` for absolute ones, ``q_rel = C q_abs``), which leaves the
+reaction on a flexible parent out. A locked joint's column is zero (its torque is a reaction).
 
 State ``z = [p; ṗ]`` (2 ndof): ``A = [[0, I], [−M⁻¹K, −M⁻¹Dₚ]]``, ``B = [[0], [M⁻¹Bᵤ]]``,
 ``C = [I, 0]`` (outputs: every generalized position) and ``D = 0``. With no damping the
@@ -18,7 +24,10 @@ rigid motion).
 
 Damping ``Dₚ``: none (default), modal (a ratio ζ for every elastic mode:
 ``Dₚ = M Φ diag(2 ζ ω) Φᵀ M`` with the mass-normalised elastic mode shapes ``Φ``, leaving the
-rigid modes undamped), or Rayleigh ``Dₚ = α M + β K``.
+rigid modes undamped), or Rayleigh ``(α, β)`` with its one meaning in pinflex
+(:func:`pinflex.linalg.held_rayleigh`): ``α M_H + β K_H`` on the deformation rates, ``M_H``,
+``K_H`` the mass and stiffness of the arm with its motors held, so each locked-joint mode
+decays at ``α/2 + β ω²/2`` and the rigid motion is not damped (as in the simulations and FRFs).
 """
 
 from __future__ import annotations
@@ -29,15 +38,26 @@ import numpy as np
 import scipy.linalg
 
 from pinflex.exceptions import ConfigurationError
+from pinflex.linalg import held_rayleigh
 
 
-def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh) -> dict:
+def _relative_rows(arm, q: np.ndarray) -> np.ndarray:
+    """``G`` (nv, ndof): the joints' physical relative motion over the solver coordinates."""
+    G = arm.relative_motion_rows(q)
+    if arm.ndof != arm.nx + arm.nv:  # locked joints: [x; q_all] = T [x; q_kept]
+        G = G @ arm.joint_transform(q)
+    return G
+
+
+def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh, torque_input: str) -> dict:
     M, K = arm.matrices(q, y)
     nd, nv, nx = arm.ndof, arm.nv, arm.nx
     nr = arm.n_rigid  # free joints (joint springs and locks: pinflex.erls.joints)
-    if rayleigh is not None:
+    if rayleigh is not None:  # the deformation's, motors held (linalg.held_rayleigh)
         alpha, beta = (float(v) for v in rayleigh)
-        damping = alpha * M + beta * K
+        G = _relative_rows(arm, q)
+        G = G[np.abs(G).max(axis=1) > 0.0]  # locked joints have no relative motion
+        damping = held_rayleigh(M, K, G, nx, alpha, beta)
     else:
         damping = np.zeros_like(M)
     lam, phi = scipy.linalg.eigh(K, M)
@@ -47,10 +67,13 @@ def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh) -> dict:
         w = np.sqrt(np.clip(lam_e, 0.0, None))
         MP = M @ phi_e
         damping = damping + MP @ np.diag(2.0 * zeta * w) @ MP.T
-    Bu = np.zeros((nx + nv, nv))
-    Bu[nx:, :] = arm.coord_map.T
-    if nd != nx + nv:  # locked joints: torques through [x; q_all] = T [x; q_kept]
-        Bu = arm.joint_transform(q).T @ Bu
+    if torque_input == "motor":
+        Bu = _relative_rows(arm, q).T
+    else:
+        Bu = np.zeros((nx + nv, nv))
+        Bu[nx:, :] = arm.coord_map.T
+        if nd != nx + nv:  # locked joints: torques through [x; q_all] = T [x; q_kept]
+            Bu = arm.joint_transform(q).T @ Bu
     sol = np.linalg.solve(M, np.hstack([K, damping, Bu]))
     A = np.zeros((2 * nd, 2 * nd))
     A[:nd, nd:] = np.eye(nd)
@@ -63,7 +86,8 @@ def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh) -> dict:
             "D": np.zeros((nd, nv)), "freq_hz": freq}
 
 
-def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None) -> dict:
+def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None,
+                 torque_input: str = "motor") -> dict:
     """M, K, damping and (A, B, C, D) at one pose (nv,) or along poses (ns, nv).
 
     Args:
@@ -72,7 +96,10 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None) -> dict:
             of length nq are accepted) [rad or m].
         y: Design values [kg] (default: nominal).
         zeta: Modal damping ratio of every elastic mode (>= 0).
-        rayleigh: ``(alpha [1/s], beta [s])`` for ``α M + β K``, added to the modal damping.
+        rayleigh: ``(alpha [1/s], beta [s])``: Rayleigh damping of the deformation (module
+            doc), added to the modal damping.
+        torque_input: ``"motor"`` (default: the actuator acts on both bodies, ``Bᵤ = Gᵀ``)
+            or ``"generalized"`` (``τ`` on the joint coordinates only); module doc.
 
     Returns:
         A dictionary of arrays: ``M``, ``K``, ``damping`` (ndof, ndof), ``A`` (2 ndof, 2 ndof),
@@ -85,9 +112,12 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None) -> dict:
         raise ConfigurationError(f"zeta = {zeta!r} must be a finite number >= 0")
     if rayleigh is not None and (np.shape(rayleigh) != (2,) or min(rayleigh) < 0.0):
         raise ConfigurationError("rayleigh must be (alpha, beta) with both >= 0")
+    if torque_input not in ("motor", "generalized"):
+        raise ConfigurationError(f"torque_input = {torque_input!r}: choose 'motor' (the "
+                                 "actuator on both bodies of the joint) or 'generalized'")
     Q = arm.check_q(q)
     yv = arm.check_y(y)
-    poses = [_one_pose(arm, qk, yv, zeta, rayleigh) for qk in np.atleast_2d(Q)]
+    poses = [_one_pose(arm, qk, yv, zeta, rayleigh, torque_input) for qk in np.atleast_2d(Q)]
     out = {k: (poses[0][k] if Q.ndim == 1 else np.stack([p[k] for p in poses]))
            for k in poses[0]}
     coords = list(arm.x_names) + list(arm.kept_joints)
@@ -101,6 +131,7 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None) -> dict:
         design_names=np.array(arm.design_names),
         zeta=np.array(float(zeta)),
         rayleigh=np.array(rayleigh if rayleigh is not None else (0.0, 0.0), dtype=float),
+        torque_input=np.array(torque_input),
     )
     return out
 

@@ -58,6 +58,8 @@ def simulation_playback(
         q = sim.q_physical[i]
         A = dyn.joint_offsets(q)[0]
         sh = np.concatenate([sim.x[i], A @ sim.x[i]])[:, None]
+        if sh.shape[0] != model.ndof:  # locked joints: to the solver coordinates [x; q_kept]
+            sh = np.linalg.lstsq(model.joint_transform(q), sh, rcond=None)[0]
         pos, motion, elastic = node_fields(model, q, sh)
         res = ModalResult(q=q, y=dyn.y, ndof=model.ndof, rigid_modes=model.nv,
                           eigvals=np.ones(1), shapes=sh, node_positions=pos,

@@ -1,0 +1,250 @@
+"""How far eq. (1) holds along a motion: the validity indicator.
+
+Eq. (1) (paper 000) leaves out the products of the elastic displacement ``u`` with the rigid
+motion of its link, ``α × u`` and ``ω × (ω × u)``, and the geometric stiffness of the axial
+loads they come with (:mod:`pinflex.dynamics.speed`). Against the elastic restoring force
+``ω_i² u`` of a mode they are of relative size
+
+    |ω_L|² / ω_i²   (centrifugal, with the centrifugal axial load)   and   |α_L| / ω_i²   (Euler),
+
+``ω_L`` and ``α_L`` the angular velocity [rad/s] and acceleration [rad/s²] of a link that
+deforms (a flexible link or a link carried by one), ``ω_i`` an elastic eigenfrequency [rad/s]
+of the arm at that pose: the locked-joint one for a prescribed or servo-held motion, the
+constrained (free-joint elastic) one for modes along a motion. :func:`validity` computes both
+ratios per sample and per mode; the **indicator** is the largest of them over the motion (at
+the lowest mode).
+
+Threshold (:data:`VALIDITY_THRESHOLD` = 0.1): on Kane, Ryan and Banerjee's spin-up beam the
+peak tip deflection of eq. (1) differs from the full linear model by 0.39 % at indicator 0.069
+(Ωs = 1 rad/s), 4.8 % at 1.1, 9.5 % at 2.5 and 22 % at 6.9 (``docs/speed.md``); the relative
+difference stays below about 0.06 × indicator there. Above the threshold a
+:class:`~pinflex.exceptions.ModelValidityWarning` says so; ``strict=True`` raises
+:class:`~pinflex.exceptions.ModelValidityError` instead. Only revolute motion is measured: a
+prismatic joint's linear acceleration loads a beam axially too (in ``terms="full"``) but is not
+in the indicator.
+
+The module loads NumPy and Pinocchio only: the modes along a motion
+(:func:`pinflex.erls.along.modes_along`), the simulations (:mod:`pinflex.dynamics`) and the
+assignment call it. :func:`sample_rates` gives joint velocities and accelerations of sampled
+motions (second-order finite differences).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pinflex.exceptions import ConfigurationError, ModelValidityError, ModelValidityWarning
+
+#: Indicator above which eq. (1) is warned about (see the module doc for its calibration).
+VALIDITY_THRESHOLD = 0.1
+
+
+@dataclass(frozen=True)
+class Validity:
+    """The validity indicator of a motion (module doc), per sample and per mode.
+
+    Attributes:
+        times_s: Sample times (n,) [s].
+        link_speed_rad_s: Largest angular speed of a deforming link (n,) [rad/s].
+        link_accel_rad_s2: Largest angular acceleration of a deforming link (n,) [rad/s²].
+        omega_rad_s: Elastic eigenfrequencies used (n, k) [rad/s].
+        speed_ratio: ``|ω_L|² / ω_i²`` (n, k).
+        accel_ratio: ``|α_L| / ω_i²`` (n, k).
+        threshold: The warning threshold of the indicator.
+        basis: What ``ω_i`` are (``"locked"``, ``"constrained"``, ...).
+    """
+
+    times_s: np.ndarray = field(repr=False)
+    link_speed_rad_s: np.ndarray = field(repr=False)
+    link_accel_rad_s2: np.ndarray = field(repr=False)
+    omega_rad_s: np.ndarray = field(repr=False)
+    speed_ratio: np.ndarray = field(repr=False)
+    accel_ratio: np.ndarray = field(repr=False)
+    threshold: float = VALIDITY_THRESHOLD
+    basis: str = "locked"
+
+    @property
+    def max_speed_ratio(self) -> float:
+        """Largest ``|ω_L|² / ω_i²`` over samples and modes."""
+        return _max(self.speed_ratio)
+
+    @property
+    def max_accel_ratio(self) -> float:
+        """Largest ``|α_L| / ω_i²`` over samples and modes."""
+        return _max(self.accel_ratio)
+
+    @property
+    def indicator(self) -> float:
+        """The larger of the two largest ratios (0 for a motion at rest)."""
+        return max(self.max_speed_ratio, self.max_accel_ratio)
+
+    @property
+    def exceeded(self) -> bool:
+        """Whether the indicator is above the threshold."""
+        return self.indicator > self.threshold
+
+    def worst(self) -> tuple[float, str]:
+        """``(time [s], "speed" | "acceleration")`` of the largest ratio."""
+        ratio = np.maximum(np.nan_to_num(self.speed_ratio[:, 0]),
+                           np.nan_to_num(self.accel_ratio[:, 0])) if self.times_s.size else []
+        if not len(ratio):
+            return float("nan"), "speed"
+        i = int(np.argmax(ratio))
+        kind = "speed" if self.speed_ratio[i, 0] >= self.accel_ratio[i, 0] else "acceleration"
+        return float(self.times_s[i]), kind
+
+    def summary(self) -> dict:
+        """JSON-ready maxima, threshold and the time of the worst sample."""
+        t, kind = self.worst()
+        return {"indicator": self.indicator, "max_speed_ratio": self.max_speed_ratio,
+                "max_accel_ratio": self.max_accel_ratio, "threshold": self.threshold,
+                "exceeded": self.exceeded, "worst_time_s": None if np.isnan(t) else t,
+                "worst_term": kind, "basis": self.basis,
+                "definition": "max over samples of |omega_link|^2/omega_i^2 and "
+                              "|alpha_link|/omega_i^2 (pinflex.erls.validity)"}
+
+    def write_csv(self, path) -> Path:
+        """One row per sample: time, link rates and both ratios per mode.
+
+        Args:
+            path: Output file (written atomically).
+
+        Returns:
+            The path written.
+        """
+        from pinflex.outputs import write_text
+
+        k = self.omega_rad_s.shape[1]
+        head = (["time_s", "link_speed_rad_s", "link_accel_rad_s2"]
+                + [f"omega{i + 1}_rad_s" for i in range(k)]
+                + [f"speed_ratio_mode{i + 1}" for i in range(k)]
+                + [f"accel_ratio_mode{i + 1}" for i in range(k)])
+        lines = [",".join(head)]
+        for i in range(self.times_s.size):
+            row = [self.times_s[i], self.link_speed_rad_s[i], self.link_accel_rad_s2[i],
+                   *self.omega_rad_s[i], *self.speed_ratio[i], *self.accel_ratio[i]]
+            lines.append(",".join(f"{float(v):.9g}" for v in row))
+        p = Path(path)
+        write_text(p, "\n".join(lines) + "\n", "validity CSV")
+        return p
+
+
+def _max(a: np.ndarray) -> float:
+    a = np.asarray(a, dtype=float)
+    return float(np.nanmax(a)) if a.size and np.any(np.isfinite(a)) else 0.0
+
+
+def deforming_links(model) -> tuple[str, ...]:
+    """Links that carry elastic displacement: the flexible links and every link below one."""
+    plan = model.plan
+    out = set(plan.beams)
+    for j in plan.joints:  # breadth-first: a parent is seen before its children
+        if j.parent in out:
+            out.add(j.child)
+    return tuple(link for link in plan.links if link in out)
+
+
+def link_rates(model, q, qd, qdd) -> tuple[np.ndarray, np.ndarray]:
+    """Largest angular speed and acceleration of a deforming link at each sample.
+
+    Args:
+        model: The :class:`~pinflex.FlexibleModel`.
+        q: Joint coordinates (n, nv) in the user convention [rad or m].
+        qd: Joint velocities (n, nv).
+        qdd: Joint accelerations (n, nv).
+
+    Returns:
+        ``(speed [rad/s], accel [rad/s²])``, each (n,).
+    """
+    import pinocchio as pin
+
+    q, qd, qdd = (np.atleast_2d(np.asarray(v, dtype=float)) for v in (q, qd, qdd))
+    pm = model.model
+    data = pm.createData()
+    fids = [model.plan.frame_ids[link] for link in deforming_links(model)]
+    C = model.coord_map
+    speed, accel = np.zeros(q.shape[0]), np.zeros(q.shape[0])
+    for i in range(q.shape[0]):
+        pin.forwardKinematics(pm, data, model.pin_configuration(q[i]), C @ qd[i], C @ qdd[i])
+        for fid in fids:
+            w = pin.getFrameVelocity(pm, data, fid, pin.LOCAL).angular
+            a = pin.getFrameAcceleration(pm, data, fid, pin.LOCAL).angular
+            speed[i] = max(speed[i], float(np.linalg.norm(w)))
+            accel[i] = max(accel[i], float(np.linalg.norm(a)))
+    return speed, accel
+
+
+def sample_rates(times_s, q) -> tuple[np.ndarray, np.ndarray]:
+    """Joint velocities and accelerations of samples (second-order finite differences).
+
+    Args:
+        times_s: Sample times (n,) [s], increasing.
+        q: Joint samples (n, nv).
+
+    Returns:
+        ``(qd, qdd)``, each (n, nv); zeros for fewer than 3 samples.
+    """
+    t = np.asarray(times_s, dtype=float)
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    if t.size < 3:
+        return np.zeros_like(q), np.zeros_like(q)
+    qd = np.gradient(q, t, axis=0, edge_order=2)
+    return qd, np.gradient(qd, t, axis=0, edge_order=2)
+
+
+def validity(model, times_s, q, qd, qdd, omega_rad_s, *, threshold: float = VALIDITY_THRESHOLD,
+             strict: bool = False, warn: bool = True, what: str = "the motion",
+             basis: str = "locked") -> Validity:
+    """The validity indicator of eq. (1) along a motion (module doc); warn or refuse above it.
+
+    Args:
+        model: The :class:`~pinflex.FlexibleModel`.
+        times_s: Sample times (n,) [s].
+        q: Joint coordinates (n, nv) [rad or m], user convention.
+        qd: Joint velocities (n, nv).
+        qdd: Joint accelerations (n, nv).
+        omega_rad_s: Elastic eigenfrequencies at each sample (n, k) or (n,) [rad/s], the
+            lowest first (non-positive or non-finite values are skipped).
+        threshold: Indicator above which to warn (default :data:`VALIDITY_THRESHOLD`).
+        strict: Raise :class:`ModelValidityError` instead of warning.
+        warn: Warn with :class:`ModelValidityWarning` above the threshold.
+        what: Name of the motion in the message.
+        basis: What the frequencies are, reported (``"locked"``, ``"constrained"``).
+
+    Returns:
+        :class:`Validity`.
+
+    Raises:
+        ConfigurationError: Shapes do not match or the threshold is not positive.
+        ModelValidityError: ``strict`` and the indicator is above the threshold.
+    """
+    t = np.atleast_1d(np.asarray(times_s, dtype=float))
+    w = np.asarray(omega_rad_s, dtype=float)
+    w = w[:, None] if w.ndim == 1 else w
+    if w.ndim != 2 or w.shape[0] != t.size:
+        raise ConfigurationError(f"omega_rad_s must have one row per sample ({t.size}), got "
+                                 f"shape {np.shape(omega_rad_s)}")
+    if not (np.isfinite(threshold) and threshold > 0.0):
+        raise ConfigurationError(f"threshold = {threshold!r} must be a positive number")
+    speed, accel = link_rates(model, q, qd, qdd)
+    if speed.size != t.size:
+        raise ConfigurationError(f"q has {speed.size} samples, times_s {t.size}")
+    w2 = np.where((w > 0.0) & np.isfinite(w), w * w, np.nan)
+    with np.errstate(invalid="ignore"):
+        out = Validity(t, speed, accel, w, speed[:, None] ** 2 / w2, accel[:, None] / w2,
+                       float(threshold), basis)
+    if out.exceeded and (strict or warn):
+        when, kind = out.worst()
+        msg = (f"{what} is fast for eq. (1): the terms it leaves out reach {out.indicator:.3g} "
+               f"of the elastic forces (|omega|^2/omega_1^2 = {out.max_speed_ratio:.3g}, "
+               f"|alpha|/omega_1^2 = {out.max_accel_ratio:.3g}; worst at t = {when:.4g} s, "
+               f"{kind}), above the threshold {threshold:g}: use terms='full' (centrifugal, "
+               "Euler and geometric-stiffness terms) or a slower motion")
+        if strict:
+            raise ModelValidityError(msg, out)
+        warnings.warn(msg, ModelValidityWarning, stacklevel=2)
+    return out
