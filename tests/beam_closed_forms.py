@@ -16,9 +16,9 @@ Nothing here imports pinflex. Two independent references for the conditioning te
 
   Point elements (from the stationarity of ``½∫EI w''² − ½ω²(∫ρA w² + m w² + J θ²)``):
   a point mass ``V⁺ = V⁻ + ω² m w``; a rotary inertia ``M⁺ = M⁻ − ω² J θ``; a hinge with
-  a torsional spring ``k``: ``θ⁺ = θ⁻ + M/k`` (``w, M, V`` continuous); a free hinge
-  ``M = 0`` and an unknown jump of ``θ``. Root: clamped ``w = θ = 0``; pinned ``w = 0,
-  M = 0``; spring ``w = 0, M = k θ``. Free tip: ``M = V = 0``.
+  a torsional spring ``k``: an unknown jump ``Δθ`` of ``θ`` with ``M = k Δθ`` (``w, M, V``
+  continuous; ``k = 0`` a free hinge), written so that no ``1/k`` appears. Root: clamped
+  ``w = θ = 0``; pinned ``w = 0, M = 0``; spring ``w = 0, M = k θ``. Free tip: ``M = V = 0``.
 
 * **The same mesh, solved in inverse form from the exact flexibility** (cantilevers): a
   Hermite-cubic (bending) and linear (axial) element mesh is nodally exact for point loads,
@@ -112,12 +112,9 @@ def _bending_det(omega2: float, segments, points, root) -> float:
         S = S / np.max(np.abs(S))  # the determinant's sign is what counts
         if pt is None:
             continue
-        if pt.hinge is not None and pt.hinge == 0.0:  # free hinge: M = 0, θ jumps freely
-            conditions.append(S[2].copy())
+        if pt.hinge is not None:  # θ jumps by an unknown Δθ with M = k Δθ (k = 0: free)
+            conditions.append(np.append(S[2], -float(pt.hinge)))
             S = np.concatenate([S, np.array([[0.0], [1.0], [0.0], [0.0]])], axis=1)
-        elif pt.hinge is not None:
-            S = S.copy()
-            S[1] += S[2] / pt.hinge
         S = S.copy()
         S[2] -= omega2 * pt.inertia * S[1]
         S[3] += omega2 * pt.mass * S[0]

@@ -113,7 +113,7 @@ def _expansion_jets(model, q0, y0, order, joints, design, idx, solver):
     big = np.argmax(np.abs(V), axis=0)
     V = V * np.sign(V[big, np.arange(V.shape[1])])
     try:
-        lam, _ = eigen_jets(rspace, M, K, idx, eigvals0=w, eigvecs0=V)
+        lam, _ = eigen_jets(rspace, M, K, idx, eigvals0=w, eigvecs0=V, n_rigid=model.n_rigid)
     except RepeatedEigenvalue as exc:
         if solver:
             raise _SolverRefused(exc) from exc

@@ -34,14 +34,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from pinflex import beam
 from pinflex.erls import design as erls_design
 from pinflex.erls import eigensolve, solve
+from pinflex.erls.solve_conditions import link_blocks, parent_rows
+from pinflex.erls.solve_conditions import link_mass as _link_mass
 from pinflex.jets import JetSpace
 from pinflex.parametric.algebra import SparseJetAlgebra
 from pinflex.parametric.design import _separable_pairs, channel_jets
 
-_K_NAMES = ("EA", "GJ", "EIy", "EIz")
+__all__ = ["add_terms", "covered", "expansion_eigenpairs", "link_blocks", "spring_rows"]
 
 
 def covered(model) -> bool:
@@ -53,98 +54,12 @@ def covered(model) -> bool:
     return model.nx > 0
 
 
-def _unit_tip(spec, name: str, nd: np.ndarray) -> np.ndarray:
-    """Clamped-tip block of the element stiffness per unit of rigidity ``name``."""
-    le = spec.length_m / spec.elements
-    args = [0.0, 0.0, 0.0, 0.0]
-    args[_K_NAMES.index(name)] = 1.0
-    return beam.element_stiffness(le, *args)[6:, 6:][np.ix_(nd, nd)]
-
-
-def link_blocks(model) -> dict:
-    """Per design channel of a beam, its constant solver-coordinate block (cached).
-
-    Returns ``{channel index: block}``: for a stiffness channel the per-element ``K̂_c``
-    (r × r), for a mass channel the six blocks ``(H_oo, H_oe, H_ov, H_ee, H_ev, H_vv)``.
-    """
-    return model.workspace().cached("solver_design_blocks", lambda: _build_link_blocks(model))
-
-
-def _build_link_blocks(model) -> dict:
-    plan = solve.solve_plan(model)
-    out: dict = {}
-    for n, ch in enumerate(model.design_channels):
-        if ch.name == "stiffness":
-            continue
-        core = plan.cores[ch.owner]
-        bp = model.plan.beams[ch.owner]
-        spec = bp.spec
-        rows = np.asarray(bp.rows)
-        N = spec.elements
-        r = rows.size // (N + 1)
-        nd = rows[:r]
-        if ch.kind == "K":
-            le = spec.length_m / N
-            sec = spec.section
-            ke = beam.element_stiffness(le, spec.E * sec.A, spec.G * sec.J, spec.E * sec.Iy,
-                                        spec.E * sec.Iz)
-            Dt = np.linalg.cholesky(ke[6:, 6:][np.ix_(nd, nd)]).T  # as solve_plan
-            zinv = np.linalg.inv(Dt)
-            blk = zinv.T @ _unit_tip(spec, ch.name, nd) @ zinv
-            out[n] = 0.5 * (blk + blk.T)
-            continue
-        A = np.concatenate([core.C, core.R, bp.jac], axis=1)[rows]
-        H = A.T @ (ch.unit @ A)
-        H = 0.5 * (H + H.T)
-        o = core.stop - core.start
-        out[n] = (H[:o, :o], H[:o, o : o + 6], H[:o, o + 6 :], H[o : o + 6, o : o + 6],
-                  H[o : o + 6, o + 6 :], H[o + 6 :, o + 6 :])
-    return out
-
-
-def _link_mass(core, H, J, ep, alg, nx: int, nv: int, nd: int) -> np.ndarray:
-    """One link's part of the solver-coordinate mass with blocks ``H`` (as :func:`solve.mass`)."""
-    H_oo, H_oe, H_ov, H_ee, H_ev, H_vv = H
-    mm, c0 = alg.mm, alg.const_at
-    out = np.zeros((alg.size, nd, nd))
-    a, z = core.start, core.stop
-    out[c0, a:z, a:z] += H_oo
-    if nv:
-        X = H_ov @ J
-        out[:, a:z, nx:] += X
-        out[:, nx:, a:z] += np.swapaxes(X, -1, -2)
-        out[:, nx:, nx:] += mm(np.swapaxes(J, -1, -2), H_vv @ J)
-    if ep is not None:
-        w = ep.shape[-1]
-        X = H_oe @ ep
-        out[:, a:z, :w] += X
-        out[:, :w, a:z] += np.swapaxes(X, -1, -2)
-        epT = np.swapaxes(ep, -1, -2)
-        out[:, :w, :w] += mm(epT, H_ee @ ep)
-        if nv:
-            X = mm(epT, H_ev @ J)
-            out[:, :w, nx:] += X
-            out[:, nx:, :w] += np.swapaxes(X, -1, -2)
-    return out
-
-
 def spring_rows(model, terms, alg, twists, sources, joint) -> np.ndarray:
     """``g`` (lead, 1, nd): the joint's physical relative motion over ``[w; q]``."""
     plan = solve.solve_plan(model)
     nx, nd = plan.nx, plan.nx + plan.nv
-    k = next(i for i, j in enumerate(model.plan.joints) if j is joint)
-    tw = twists[joint.parent]
-    e_full = None
-    if tw is not None:
-        e = solve.explicit_twist(tw, sources, alg)
-        e_full = np.zeros((alg.size, 6, nx))
-        e_full[:, :, : e.shape[-1]] = e
-    tau = solve.attach_twist(plan.joint_attach[k], e_full, alg, nx)
     g = np.zeros((alg.size, 1, nd))
-    if tau is not None:
-        a = joint.R_o @ joint.axis  # the joint axis in parent link axes
-        part = tau[:, 3:] if joint.kind == "revolute" else tau[:, :3]
-        g[:, 0, :nx] = -np.einsum("i,lix->lx", a, part)
+    g[:, 0, :nx] = -parent_rows(model, plan, alg, twists, sources, [joint])[:, 0]
     g[alg.const_at, 0, nx:] += model.coord_map[joint.user_col]
     return g
 
