@@ -11,19 +11,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from arms import _rot, _rpy
 from beam_closed_forms import Point, Segment, cantilever_mesh_hz
 from reference_fe import Beam, spatial_frame_frequencies_extended
-
-
-def _rot(axis, angle):
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
-
-
-def _rpy(r, p, y):
-    return _rot([0, 0, 1], y) @ _rot([0, 1, 0], p) @ _rot([1, 0, 0], r)
-
 
 STEEL = dict(E=2.0e11, G=8.0e10, density=7800.0)
 

@@ -279,9 +279,13 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
             node_positions=positions, node_motion=motion, node_elastic=elastic,
         )
     shapes = np.concatenate([eigensolve.to_nodal(model, twist, sw, data), sx], axis=1)
+    return _nodal_result(model, q, y, lam, shapes, terms, data)
+
+
+def _nodal_result(model, q, y, lam, shapes, terms, data) -> ModalResult:
+    """The :class:`ModalResult` of shapes over ``[x; q_kept]`` (signed: largest ``x`` positive)."""
     nx = model.nx
     k = lam.size
-    # sign: largest elastic component positive
     phix = shapes[:nx]
     idx = np.argmax(np.abs(phix), axis=0)
     shapes *= np.where(phix[idx, np.arange(k)] < 0, -1.0, 1.0)[None, :]
@@ -379,15 +383,7 @@ def _modes_conditions(model, q, y, n_modes, data) -> ModalResult:
     if phie is not None:  # high modes from the nodal pencil
         Mx, Kx = model.matrices_from_terms(terms, y, 1)
         shapes = np.concatenate([shapes, _nodal_shapes(model, Mx[0], Kx[0], phie)], axis=1)
-    k = lam.size
-    phix = shapes[:nx]
-    idx = np.argmax(np.abs(phix), axis=0)
-    shapes *= np.where(phix[idx, np.arange(k)] < 0, -1.0, 1.0)[None, :]
-    positions, motion, elastic = node_fields(model, q, shapes, terms, data)
-    return ModalResult(
-        q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
-        node_positions=positions, node_motion=motion, node_elastic=elastic,
-    )
+    return _nodal_result(model, q, y, lam, shapes, terms, data)
 
 
 def _nodal_shapes(model, M: np.ndarray, K: np.ndarray, phie: np.ndarray) -> np.ndarray:
