@@ -309,3 +309,55 @@ def test_no_false_repeated_eigenvalue_on_a_fine_mesh():
     tm = expand(model, q, order=2, modes=(1, 2))
     f = model.frequencies(q, n_modes=2)
     np.testing.assert_allclose(tm.evaluate(q[None], quantity="freq_hz").ravel(), f, rtol=1e-10)
+
+
+# ---------------------------------------------------------------------------------------
+# Taylor expansion on a soft spring
+# ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("k", [1e-8, 1e-4])
+def test_taylor_expansion_on_a_soft_elbow_spring(k):
+    """expand() with a soft elbow spring: right at and near its expansion point.
+
+    The expansion's solver pencil put the spring's huge μ first and left its highest modes
+    unresolved; the nodal fallback then gave the spring mode 0.86 % off (k = 1e-4 N m/rad)
+    or a negative eigenvalue and a ValueError (k ≤ 1e-6). Reference: the transfer-matrix
+    chain (pinned root, hinge spring) at the straight pose; the exact model beside it.
+    """
+    from pinflex.parametric import expand
+
+    model = FlexibleModel(parse(chain([0.6, 0.4], [96, 64])), planar=True, joints={"j1": k})
+    segs = [Segment(0.6, EI_A, RHOA_A, 2e7), Segment(0.4, EI_A, RHOA_A, 2e7)]
+    ref = planar_chain_hz(segs, [Point(hinge=k), None], "pinned", 3, omega_max=2000.0,
+                          omega_min=1e-8)
+    tm = expand(model, np.zeros(2), order=4, modes=(1, 2, 3))
+    f0 = tm.evaluate(np.zeros((1, 2)), quantity="freq_hz").ravel()
+    assert _rel(f0, model.frequencies(np.zeros(2), n_modes=3)) < 1e-8  # 2e-9 at k = 1e-4
+    assert _rel(f0, ref) < 2e-8, (f0, ref)  # the mesh error of mode 3: 1.1e-8
+    q = np.array([[0.0, 0.02]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pex.TaylorRadiusWarning)
+        g = tm.evaluate(q, quantity="freq_hz").ravel()
+    assert _rel(g, model.frequencies(q[0], n_modes=3)) < 1e-8  # truncation (0.02)⁵: 2.5e-9
+
+
+def test_expansion_point_disagreeing_with_the_exact_solve_is_refused(monkeypatch):
+    """A Taylor model whose first coefficient is off the exact solve is refused by name.
+
+    Fault injected: the expansion's mass jets scaled by 1 + 1e-4 (a consistent pencil, so the
+    eigenpair checks of the recursion pass; only the comparison with the exact solve sees it).
+    """
+    from pinflex.parametric import expand, expansion
+
+    model = FlexibleModel(parse(chain([0.6, 0.4], [8, 8])), planar=True, joints={"j1": 50.0})
+    expand(model, np.zeros(2), order=2, modes=(1,))  # fine as it is
+    real = expansion.reduced_solver_jets
+
+    def off(*args, **kwargs):
+        space, rspace, keep, M, K, jidx, didx = real(*args, **kwargs)
+        return space, rspace, keep, M * (1.0 + 1e-4), K, jidx, didx
+
+    monkeypatch.setattr(expansion, "reduced_solver_jets", off)
+    with pytest.raises(pex.EigenSolverError, match="differs from the exact modal solve"):
+        expand(model, np.zeros(2), order=2, modes=(1,))

@@ -147,20 +147,22 @@ def _pair_levels(eigvals: np.ndarray, mode: int, n_rigid: int | None = None) -> 
 
     Without ``n_rigid``: ``100·n·ε·max|λ|`` (a direct solve's absolute level, which also makes
     several rigid zeros one cluster). With the number of rigid modes known, the rigid zeros
-    keep that level and two elastic modes get ``100·n·ε·λ_j·λ_mode/λ_e`` (``λ_e`` the lowest
-    elastic eigenvalue): the inverse (solver-coordinate) form gives ``μ = 1/λ`` to an absolute
-    ``~n·ε/λ_e``, so its low modes keep their relative accuracy on any mesh. The absolute
-    level put well-separated low modes of a fine mesh in one cluster (benchmark A with 224 +
-    224 elements: λ up to ~2e17, modes 1.47e6 and 7.19e6 rad²/s² 'repeated'). Where the
-    eigenvalues are less accurate than that (a direct solve of a fine mesh), a true double root
-    is still caught by the condition check of the bordered matrix.
+    keep that level and two elastic modes get ``100·n·ε·min(λ_j·λ_mode/λ_e, max|λ|)``
+    (``λ_e`` the lowest elastic eigenvalue): the inverse (solver-coordinate) form gives
+    ``μ = 1/λ`` to an absolute ``~n·ε/λ_e``, so its low modes keep their relative accuracy on
+    any mesh, and modes it resolves worse than a direct solve (above a spring mode far below
+    the beams') come from the direct solve, absolute ``~n·ε·max|λ|``. The absolute level alone
+    put well-separated low modes of a fine mesh in one cluster (benchmark A with 224 + 224
+    elements: λ up to ~2e17, modes 1.47e6 and 7.19e6 rad²/s² 'repeated'); the relative one
+    alone every mode above a 1e-8 N m/rad spring. Where the eigenvalues are less accurate than
+    that, a true double root is still caught by the condition check of the bordered matrix.
     """
     a = np.abs(eigvals)
     level = 100.0 * eigvals.size * _EPS
     out = np.full(a.shape, level * float(np.max(a, initial=0.0)))
     if n_rigid is not None and n_rigid <= mode:
         low = max(float(np.min(a[n_rigid:])), np.finfo(float).tiny)
-        out[n_rigid:] = level * a[n_rigid:] * (a[mode] / low)
+        out[n_rigid:] = level * np.minimum(a[n_rigid:] * (a[mode] / low), np.max(a))
     return out
 
 

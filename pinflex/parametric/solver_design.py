@@ -38,6 +38,7 @@ from pinflex.erls import design as erls_design
 from pinflex.erls import eigensolve, solve
 from pinflex.erls.solve_conditions import link_blocks, parent_rows
 from pinflex.erls.solve_conditions import link_mass as _link_mass
+from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
 from pinflex.parametric.algebra import SparseJetAlgebra
 from pinflex.parametric.design import _separable_pairs, channel_jets
@@ -203,7 +204,7 @@ def _eliminate_locks(model, space: JetSpace, terms, salg, twists, sources, emb, 
     return Mm, 0.5 * (Km + np.swapaxes(Km, 1, 2))
 
 
-def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
+def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray, modes=()):
     """All eigenpairs of the solver-coordinate pencil ``(K0, M0)`` at the expansion point.
 
     ``K0`` is positive definite on the elastic coordinates (``w`` and the spring joints' ``q``)
@@ -214,12 +215,15 @@ def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
     condensed out of the mass, and the symmetric ``B = M_uu − M_uf M_ff⁻¹ M_fu`` gives
     ``μ = 1/λ``. A constant change of coordinates of one pencil: eigenvalues unchanged.
 
+    Modes the inverse form does not resolve (a spring far softer than the beams) are taken
+    from a direct solve of the same pencil (:func:`_high_modes_direct`); those of them in
+    ``modes`` (indices into the returned ``w``) are polished by inverse iteration, so their
+    residual is at the rounding level the eigenpair jets require.
+
     Returns:
         ``(w, V)``: eigenvalues ascending (free joints' zeros first) and mass-normalised
         shapes over ``[w; q]`` (columns in the order of ``w``).
     """
-    from pinflex.exceptions import ConfigurationError
-
     nd = K0.shape[0]
     nx = model.nx
     Z = None
@@ -246,18 +250,61 @@ def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
     mu, U = np.linalg.eigh(0.5 * (B + B.T))
     mu, U = mu[::-1], U[:, ::-1]
     bad = ~(mu > eigensolve.noise_level(mu))
-    if np.any(bad):
-        raise ConfigurationError(
-            f"the highest {int(bad.sum())} modes at the expansion point are not resolved in "
-            "solver coordinates; use fewer elements"
-        )
-    phi_u = U / np.sqrt(mu)
+    phi_u = U / np.sqrt(np.where(bad, 1.0, mu))
     V = np.zeros((nd, nd))
     nf = fr.size
     V[e, nf:] = Linv.T @ phi_u
     if nf:
         V[fr, nf:] = -np.linalg.solve(Mff, Muf.T @ phi_u)
         V[fr, :nf] = np.linalg.inv(Lf.T)
+    lam = np.concatenate([np.zeros(nf), 1.0 / np.where(bad, 1.0, mu)])
+    if np.any(bad):
+        lam, V = _high_modes_direct(K0, M0, lam, V, mu, nf, modes)
     if Z is not None:
         V = Z @ V
-    return np.concatenate([np.zeros(nf), 1.0 / mu]), V
+    return lam, V
+
+
+def _high_modes_direct(K0, M0, lam, V, mu, nf, polish=()):
+    """Modes the inverse form leaves unresolved (or resolves worse), from a direct solve.
+
+    Mode ``j`` of the inverse form carries a relative rounding error ``~ ε λ_j/λ_1``, of the
+    direct (Cholesky of the mass) solve of the same pencil ``~ ε λ_max/λ_j``: a spring far
+    softer than the beams puts a huge ``μ`` first and leaves the highest modes of the inverse
+    form below its rounding level (they were refused, and the expansion fell back to the nodal
+    pencil, which lost the spring mode: 0.86 % at 1e-4 N m/rad). From the first mode where the
+    direct solve is the better one, the modes are taken from it: same pencil and coordinates,
+    same mass normalisation. Its pairs have residuals ``~ ε λ_max``; those in ``polish`` get
+    two steps of inverse iteration with the Rayleigh quotient.
+    """
+    import scipy.linalg
+
+    lam_d, V_d = scipy.linalg.eigh(0.5 * (K0 + K0.T), 0.5 * (M0 + M0.T), check_finite=False)
+    lam_d, V_d = lam_d[nf:], V_d[:, nf:]  # the free joints' zeros first
+    ne = lam_d.size
+    tiny = np.finfo(float).tiny
+    inv_err = np.where(mu > eigensolve.noise_level(mu), lam[nf:] / max(lam[nf], tiny), np.inf)
+    with np.errstate(divide="ignore", over="ignore"):
+        dir_err = np.abs(lam_d[-1]) / np.abs(lam_d)
+    better = np.flatnonzero(dir_err < inv_err)
+    j0 = int(better[0]) if better.size else ne
+    if np.any(~(lam_d[j0:] > 64.0 * np.finfo(float).eps * abs(lam_d[-1]))):
+        raise ConfigurationError(
+            f"modes {nf + j0 + 1}.. at the expansion point are resolved neither in solver "
+            "coordinates nor by a direct solve; use fewer elements"
+        )
+    lam = lam.copy()
+    V = V.copy()
+    lam[nf + j0 :] = lam_d[j0:]
+    V[:, nf + j0 :] = V_d[:, j0:]
+    for j in polish:
+        if j < nf + j0:
+            continue
+        x = V[:, j]
+        for _ in range(2):  # inverse iteration, shift at the current eigenvalue
+            lu = scipy.linalg.lu_factor(K0 - lam[j] * M0, check_finite=False)  # near-singular
+            y = scipy.linalg.lu_solve(lu, M0 @ x, check_finite=False)
+            x = y / np.sqrt(y @ M0 @ y)
+            lam[j] = float(x @ K0 @ x)
+        V[:, j] = x
+    return lam, V
