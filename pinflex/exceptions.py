@@ -167,6 +167,10 @@ class TrajectoryWarning(PinflexWarning):
     """A trajectory leaves the joint limits or is otherwise suspicious."""
 
 
+class SoftSpringWarning(PinflexWarning):
+    """A joint spring too soft to matter is treated as a free joint (see erls.joints)."""
+
+
 class InvalidBeam(InvalidBeamProperty):
     """A PRBDM beam planform is malformed (vertices, widths, thickness or material)."""
 

@@ -107,10 +107,10 @@ def test_spatial_springs_and_locks_match_global_frame(seed):
     elbow_locked = FlexibleModel(desc, joints={"j2": "locked"})
     for q in rng.uniform(-np.pi, np.pi, size=(2, 2)):
         _, ref = spatial_reference(q, m1, m2, springs={0: k1, 1: k2})
-        # the soft spring modes (~2 Hz beside ~1e4 Hz) lose a digit to conditioning
         np.testing.assert_allclose(sprung.frequencies(q), ref, rtol=1e-8)
         _, ref = spatial_reference(q, m1, m2, elbow="fixed")
-        np.testing.assert_allclose(elbow_locked.frequencies(q), ref, rtol=1e-9)
+        # the top modes of the inverse form carry ~n ε λ_k/λ_1 (1.2e-9 at mode 52 of 54)
+        np.testing.assert_allclose(elbow_locked.frequencies(q), ref, rtol=3e-9)
 
 
 def _straight_arm(e1, e2, joints):

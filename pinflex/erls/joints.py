@@ -196,6 +196,7 @@ def layout(model, plan, joints) -> JointLayout:
             for a in model.description.joint_annotations.values()
             if a.stiffness_ref is not None and not a.locked
         }
+    conds = _soft_springs_free(plan, conds, spring_refs)
     nv, nx = model.nv, plan.nx
     locked = [i for i, c in enumerate(conds) if c.kind == "locked"]
     kept = [i for i, c in enumerate(conds) if c.kind != "locked"]
@@ -245,6 +246,50 @@ def layout(model, plan, joints) -> JointLayout:
         locked_joints=locked_joints, lock_T0=_frozen(T0), lock_inv=_frozen(inv),
         lock_rows=_frozen(rows), plain=plain, modal_Winv=_frozen(Winv),
     )
+
+
+#: A spring softer than this multiple of the softest beam's own stiffness (``E I_min / L``
+#: [N m/rad] for a revolute joint, ``3 E I_min / L³`` [N/m] for a prismatic one) is a free
+#: joint: its mode would lie some 1e-8 times below the first elastic frequency and it changes
+#: the other modes by less than round-off (relative ``~ k L / EI``). Stiffer springs are
+#: resolved exactly, however soft (:mod:`pinflex.erls.solve_conditions`).
+SOFT_SPRING_RATIO = 1e-16
+
+
+def _soft_springs_free(plan, conds, spring_refs) -> tuple:
+    """``conds`` with the springs below :data:`SOFT_SPRING_RATIO` made free, with a warning.
+
+    A spring whose stiffness is a design parameter keeps its condition (the design may move it).
+    """
+    if not plan.beams or not any(c.kind == "spring" for c in conds):
+        return conds
+    kinds = {j.name: j.kind for j in plan.joints}
+    rot = lin = np.inf
+    for p in plan.beams.values():
+        spec = p.spec
+        EI = spec.E * min(spec.section.Iy, spec.section.Iz)
+        rot = min(rot, EI / spec.length_m)
+        lin = min(lin, 3.0 * EI / spec.length_m**3)
+    out = []
+    for c in conds:
+        ref = rot if kinds.get(c.name) != "prismatic" else lin
+        soft = c.kind == "spring" and c.stiffness < SOFT_SPRING_RATIO * ref
+        if soft and c.name not in spring_refs:
+            import warnings
+
+            from pinflex.exceptions import SoftSpringWarning
+
+            unit = "N/m" if kinds.get(c.name) == "prismatic" else "N m/rad"
+            warnings.warn(
+                f"joint '{c.name}': stiffness {c.stiffness:.3g} {unit} is below "
+                f"{SOFT_SPRING_RATIO:g} times the softest beam's own stiffness ({ref:.3g} {unit}):"
+                " treated as a free joint (its mode would lie below 1e-8 times the first "
+                "elastic frequency, and it changes the other modes by less than round-off)",
+                SoftSpringWarning, stacklevel=6,
+            )
+            c = JointCondition(c.name, "free", 0.0)
+        out.append(c)
+    return tuple(out)
 
 
 #: A spring stiffer than this multiple of the stiffest beam element's own stiffness loses

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.erls import eigensolve, joints, one_pose, solve
+from pinflex.erls import eigensolve, joints, one_pose, solve, solve_conditions
 from pinflex.erls.terms import BatchAlgebra
 from pinflex.exceptions import ConfigurationError, EigenSolverError
 from pinflex.linalg import rotate_twist
@@ -118,13 +118,15 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
     """Non-rigid eigenfrequencies [Hz] at one or many poses, ascending.
 
     Batched: all poses are assembled and solved together, by the conditioned solve of
-    :mod:`pinflex.erls.solve` (the same one as :func:`modes`) where it covers the model.
+    :mod:`pinflex.erls.solve` (free joints) or :mod:`pinflex.erls.solve_conditions` (joint
+    springs, locks, section and material design), the same as :func:`modes`.
 
     Returns:
         (k,) for one pose or (n, k).
     """
     data = model.workspace(data)
-    if not solve.supported(model):
+    plain = solve.supported(model)
+    if not plain and not solve_conditions.covered(model):
         return _frequencies_nodal(model, Q, y, n_modes=n_modes, check_bounds=check_bounds,
                                   data=data)
     y = model.check_y(y, bounds=check_bounds)  # Q: checked by FlexibleModel.frequencies
@@ -135,6 +137,16 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
             f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
         )
     _check_n_modes(n_modes)
+    if not plain:  # springs, locks, beam design: relative joint values
+        terms = model.pose_terms(Qb, data=data)
+
+        def pencil_c(i):  # nodal-coordinate pair of pose i, for high modes of extreme spectra
+            Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)
+            return (*reduced(model, Mi[0], Ki[0]), Mi[0])
+
+        P = solve_conditions.pencil(model, terms, y, Qb.shape[0], data)
+        f = np.sqrt(solve_conditions.eigvals(model, P, n_modes, pencil_c)) / (2.0 * np.pi)
+        return f[0] if single else f
     layout = one_pose.one_pose_layout(model, data) if single and y.ndim == 1 else None
     if layout is not None:  # one pose: one product S^T W S instead of the block assembly
         terms = model.pose_terms_one(Q, data=data)
@@ -226,17 +238,21 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
           data=None) -> ModalResult:
     """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
 
-    Solved like :func:`frequencies` (the conditioned solve of :mod:`pinflex.erls.solve` where
-    it covers the model); the shapes are returned over the nodal coordinates ``[x; q]``.
+    Solved like :func:`frequencies` (the conditioned solves of :mod:`pinflex.erls.solve` and
+    :mod:`pinflex.erls.solve_conditions`); the shapes are returned over the nodal coordinates
+    ``[x; q_kept]``.
     """
     data = model.workspace(data)
-    if not solve.supported(model):
+    plain = solve.supported(model)
+    if not plain and not solve_conditions.covered(model):
         return _modes_nodal(model, q, y, n_modes=n_modes, check_bounds=check_bounds, data=data)
     q = model.check_q(q)
     if q.ndim != 1:
         raise ConfigurationError("modes() takes one pose; use frequencies() for many")
     y = model.check_y(y, bounds=check_bounds)
     _check_n_modes(n_modes)
+    if not plain:  # springs, locks, beam design: relative joint values
+        return _modes_conditions(model, q, y, n_modes, data)
     terms, placements = model.pose_terms_and_placements(q, data=data)
     plan = solve.solve_plan(model, data)
     twist = one_pose.root_twists_one(model, plan, terms, data)
@@ -263,9 +279,13 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
             node_positions=positions, node_motion=motion, node_elastic=elastic,
         )
     shapes = np.concatenate([eigensolve.to_nodal(model, twist, sw, data), sx], axis=1)
+    return _nodal_result(model, q, y, lam, shapes, terms, data)
+
+
+def _nodal_result(model, q, y, lam, shapes, terms, data) -> ModalResult:
+    """The :class:`ModalResult` of shapes over ``[x; q_kept]`` (signed: largest ``x`` positive)."""
     nx = model.nx
     k = lam.size
-    # sign: largest elastic component positive
     phix = shapes[:nx]
     idx = np.argmax(np.abs(phix), axis=0)
     shapes *= np.where(phix[idx, np.arange(k)] < 0, -1.0, 1.0)[None, :]
@@ -345,6 +365,41 @@ def _solver_fields(model, plan, twist, terms, placements, sw: np.ndarray):
     return shapes, positions, motion, elastic
 
 
+def _modes_conditions(model, q, y, n_modes, data) -> ModalResult:
+    """:func:`modes` of a model with springs, locks or beam design (:mod:`.solve_conditions`)."""
+    terms = model.pose_terms(q[None], data=data)
+
+    def pencil():
+        Mx, Kx = model.matrices_from_terms(terms, y, 1)
+        return (*reduced(model, Mx[0], Kx[0]), Mx[0])
+
+    P = solve_conditions.pencil(model, terms, y, 1, data)
+    lam, sw, phie = solve_conditions.eigvecs(model, P, n_modes, pencil, data)
+    nx = model.nx
+    twist = solve.root_twists(model, solve.solve_plan(model, data), terms, 1)
+    conds = model.plan.conditions.conditions
+    kept = nx + np.array([i for i, c in enumerate(conds) if c.kind != "locked"], dtype=int)
+    shapes = eigensolve.to_nodal(model, twist, sw, data)[np.concatenate([np.arange(nx), kept])]
+    if phie is not None:  # high modes from the nodal pencil
+        Mx, Kx = model.matrices_from_terms(terms, y, 1)
+        shapes = np.concatenate([shapes, _nodal_shapes(model, Mx[0], Kx[0], phie)], axis=1)
+    return _nodal_result(model, q, y, lam, shapes, terms, data)
+
+
+def _nodal_shapes(model, M: np.ndarray, K: np.ndarray, phie: np.ndarray) -> np.ndarray:
+    """Shapes over ``[x; q_kept]`` of eigenvectors ``phie`` of the nodal reduced pencil."""
+    shapes = np.zeros((model.ndof, phie.shape[1]))
+    lay = model.plan.conditions
+    e, r = lay.elastic_cols, lay.rigid_cols
+    shapes[e] = phie
+    if r.size:
+        Mi = M if lay.plain else relative_joint_values(model, M, K)[0]
+        shapes[r] = -np.linalg.solve(Mi[np.ix_(r, r)], Mi[np.ix_(r, e)] @ phie)
+    if lay.modal_Winv is not None:
+        shapes[model.nx:] = lay.modal_Winv @ shapes[model.nx:]
+    return shapes
+
+
 def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
                  data=None) -> ModalResult:
     """Modes from the nodal-coordinate pencil (models the conditioned solve lacks)."""
@@ -361,15 +416,7 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     ne = model.n_elastic
     k = ne if n_modes is None else min(int(n_modes), ne)
     lam, phie = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[0, k - 1] if k else None)
-    shapes = np.zeros((model.ndof, k))
-    lay = model.plan.conditions
-    e, r = lay.elastic_cols, lay.rigid_cols
-    shapes[e] = phie
-    if r.size:
-        Mi = M if lay.plain else relative_joint_values(model, M, K)[0]
-        shapes[r] = -np.linalg.solve(Mi[np.ix_(r, r)], Mi[np.ix_(r, e)] @ phie)
-    if lay.modal_Winv is not None:
-        shapes[model.nx:] = lay.modal_Winv @ shapes[model.nx:]
+    shapes = _nodal_shapes(model, M, K, phie)
     # sign: largest elastic component positive
     idx = np.argmax(np.abs(phie), axis=0)
     shapes *= np.sign(phie[idx, np.arange(k)])[None, :]

@@ -937,8 +937,10 @@ class FlexibleModel:
               data: FlexibleData | None = None):
         """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
 
-        Solves ``Kₓₓ φₓ = λ (Mₓₓ − Mₓq Mqq⁻¹ Mqx) φₓ`` (rigid coordinates condensed out, joints
-        free) and recovers the joint part ``φq = −Mqq⁻¹ Mqx φₓ``.
+        Solves ``K φ = λ M φ`` with the free joints' coordinates condensed out, in the
+        conditioned coordinates of :mod:`pinflex.erls.solve` (free joints) or
+        :mod:`pinflex.erls.solve_conditions` (springs, locks, section or material design), the
+        same solve as :meth:`frequencies`, and returns the shapes over ``[x; q_kept]``.
 
         Args:
             q: Joint coordinates (nv,) in the user convention [rad or m], or a Pinocchio

@@ -44,7 +44,9 @@ Failure detection:
     analytic eigenvector branch and the bordered matrix is singular: :func:`eigen_jets`
     raises :class:`~pinflex.exceptions.RepeatedEigenvalue` instead of returning numbers. Two
     eigenvalues are clustered when ``|λ_i − λ_j| ≤ rtol·max(|λ_i|, |λ_j|) + atol``; the
-    default ``atol`` is the eigensolver's noise level ``100·n·ε·max|λ|`` so that multiple rigid
+    default ``atol`` is the rounding level of the pair, relative to the elastic spectrum
+    (``100·n·ε·λ_i·λ_j/λ_e`` when the number of rigid modes is given, rigid zeros
+    ``100·n·ε·max|λ|``) so that multiple rigid
     (zero) eigenvalues form a cluster. A simple non-zero mode next to a multiple zero
     eigenvalue is fine. The bordered matrix's reciprocal condition number is checked too.
 """
@@ -107,7 +109,8 @@ def _recursion_plan(space: JetSpace) -> tuple[list, list]:
 
 
 def find_cluster(
-    eigvals: np.ndarray, mode: int, *, rtol: float = 1e-6, atol: float | None = None
+    eigvals: np.ndarray, mode: int, *, rtol: float = 1e-6, atol: float | None = None,
+    n_rigid: int | None = None,
 ) -> list[int]:
     """Indices of the eigenvalues that are (nearly) equal to ``eigvals[mode]``.
 
@@ -115,23 +118,57 @@ def find_cluster(
         eigvals: All eigenvalues ``λ`` [rad²/s²], ascending, shape ``(n,)``.
         mode: Index of the mode of interest.
         rtol: Relative tolerance.
-        atol: Absolute tolerance [rad²/s²]; default ``100·n·ε·max|λ|``.
+        atol: Absolute tolerance [rad²/s²]; default the rounding level of the pair
+            (:func:`_pair_levels`).
+        n_rigid: Number of rigid (zero) modes first in ``eigvals``, when the caller knows it:
+            they form a cluster among themselves and never with an elastic mode, and the
+            elastic modes' levels are relative to the elastic spectrum. None: the level is
+            ``100·n·ε·max|λ|`` for every eigenvalue.
 
     Returns:
         Sorted indices ``j`` with ``|λ_j − λ_mode| ≤ rtol·max(|λ_j|, |λ_mode|) + atol``,
         including ``mode`` itself.
     """
     w = np.asarray(eigvals, dtype=float)
-    if atol is None:
-        atol = _default_atol(w)
     lam = w[mode]
-    close = np.abs(w - lam) <= rtol * np.maximum(np.abs(w), abs(lam)) + atol
+    if atol is not None:
+        tol = np.full(w.shape, float(atol))
+    else:
+        tol = _pair_levels(w, mode, n_rigid)
+    close = np.abs(w - lam) <= rtol * np.maximum(np.abs(w), abs(lam)) + tol
+    if n_rigid is not None:  # rigid and elastic modes are told apart by count
+        rigid = np.arange(w.size) < n_rigid
+        close &= rigid == rigid[mode]
     return [int(j) for j in np.flatnonzero(close)]
 
 
-def _default_atol(eigvals: np.ndarray) -> float:
-    """Eigensolver noise level ``100·n·ε·max|λ|`` [rad²/s²]."""
-    return 100.0 * eigvals.size * _EPS * float(np.max(np.abs(eigvals)))
+def _pair_levels(eigvals: np.ndarray, mode: int, n_rigid: int | None = None) -> np.ndarray:
+    """Rounding level [rad²/s²] of ``λ_j − λ_mode`` for every ``j``.
+
+    Without ``n_rigid``: ``100·n·ε·max|λ|`` (a direct solve's absolute level, which also makes
+    several rigid zeros one cluster). With the number of rigid modes known, the rigid zeros
+    keep that level and two elastic modes get ``100·n·ε·min(λ_j·λ_mode/λ_e, max|λ|)``
+    (``λ_e`` the lowest elastic eigenvalue): the inverse (solver-coordinate) form gives
+    ``μ = 1/λ`` to an absolute ``~n·ε/λ_e``, so its low modes keep their relative accuracy on
+    any mesh, and modes it resolves worse than a direct solve (above a spring mode far below
+    the beams') come from the direct solve, absolute ``~n·ε·max|λ|``. The absolute level alone
+    put well-separated low modes of a fine mesh in one cluster (benchmark A with 224 + 224
+    elements: λ up to ~2e17, modes 1.47e6 and 7.19e6 rad²/s² 'repeated'); the relative one
+    alone every mode above a 1e-8 N m/rad spring. Where the eigenvalues are less accurate than
+    that, a true double root is still caught by the condition check of the bordered matrix.
+    """
+    a = np.abs(eigvals)
+    level = 100.0 * eigvals.size * _EPS
+    out = np.full(a.shape, level * float(np.max(a, initial=0.0)))
+    if n_rigid is not None and n_rigid <= mode:
+        low = max(float(np.min(a[n_rigid:])), np.finfo(float).tiny)
+        out[n_rigid:] = level * np.minimum(a[n_rigid:] * (a[mode] / low), np.max(a))
+    return out
+
+
+def _default_atol(eigvals: np.ndarray, mode: int, n_rigid: int | None = None) -> float:
+    """The rounding level of ``eigvals[mode]`` itself (:func:`_pair_levels`) [rad²/s²]."""
+    return float(_pair_levels(eigvals, mode, n_rigid)[mode])
 
 
 def _relative_gap(w: np.ndarray, mode: int, atol: float) -> float:
@@ -195,6 +232,7 @@ def eigen_jets(
     cluster_rtol: float = 1e-6,
     cluster_atol: float | None = None,
     cond_max: float = 1e13,
+    n_rigid: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Jets of chosen eigenvalues and mass-normalised eigenvectors of ``K φ = λ M φ``.
 
@@ -214,6 +252,8 @@ def eigen_jets(
         cluster_rtol: Relative tolerance of :func:`find_cluster`.
         cluster_atol: Absolute tolerance of :func:`find_cluster` [rad²/s²].
         cond_max: Largest accepted 1-norm condition number of the (scaled) bordered matrix.
+        n_rigid: Number of rigid (zero) modes first in the spectrum, if known: the cluster
+            test is then relative to the elastic spectrum (:func:`find_cluster`).
 
     Returns:
         ``(lam_jets, phi_jets)``: eigenvalue jets of shape ``(ncoef, nmodes)`` [rad²/s²] and
@@ -263,9 +303,9 @@ def eigen_jets(
     lam0 = w[mode_list]
 
     # Detection: clusters first, then a residual check of supplied pairs.
-    atol = _default_atol(w) if cluster_atol is None else float(cluster_atol)
     for m in mode_list:
-        cluster = find_cluster(w, m, rtol=cluster_rtol, atol=atol)
+        atol = _default_atol(w, m, n_rigid) if cluster_atol is None else float(cluster_atol)
+        cluster = find_cluster(w, m, rtol=cluster_rtol, atol=cluster_atol, n_rigid=n_rigid)
         if len(cluster) > 1:
             raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m, atol))
     residual = K0 @ phi0 - (M0 @ phi0) * lam0
@@ -284,6 +324,7 @@ def eigen_jets(
         if not rcond * cond_max >= 1.0:
             nearest = int(np.delete(np.arange(n), m)[np.argmin(np.abs(np.delete(w, m) - w[m]))])
             cluster = sorted({m, nearest})
+            atol = _default_atol(w, m, n_rigid) if cluster_atol is None else float(cluster_atol)
             raise RepeatedEigenvalue(m, cluster, w[cluster], _relative_gap(w, m, atol))
         factors.append((lu, piv, sigma))
 

@@ -55,6 +55,7 @@ def expand_at_order(model: FlexibleModel, q0, y0=None, *, order: int = 4,
             raise refused.error from None
         space, lam, w, slopes, jidx, didx = _expansion_jets(model, q0, y0, order, joints,
                                                             design, idx, False)
+    _check_expansion_point(model, q0, y0, modes, lam[0])
     elastic = slice(model.n_rigid, None)
     spectrum = w[elastic].copy()
     # estimated radius (nvars, k) along each variable axis: min of coefficient and spectrum
@@ -74,6 +75,44 @@ def expand_at_order(model: FlexibleModel, q0, y0=None, *, order: int = 4,
         spectrum_slopes=slopes,
         joints=model.joint_labels(),
     )
+
+
+#: Largest relative difference between a Taylor model's eigenvalue at its expansion point and
+#: the exact modal solve's before the expansion is refused (see :func:`_check_expansion_point`).
+EXPANSION_POINT_RTOL = 1e-6
+
+
+def _check_expansion_point(model, q0, y0, modes, lam0: np.ndarray) -> None:
+    """Refuse an expansion whose eigenvalues at ``x0`` differ from the exact modal solve.
+
+    The expansion's eigenpairs come from its own pencil (the solver-coordinate jets, or the
+    nodal ones when those refuse). On models with joint springs, locks or section design that
+    pencil is not the conditioned form of :mod:`pinflex.erls.solve_conditions`: a spring far
+    softer than the beams (k = 1e-4 N m/rad on a 1 m bar: the spring mode 0.86 % off, 1e-6: a
+    negative eigenvalue) or a fine mesh on the nodal fallback loses digits there. The exact
+    solve (``frequencies()``) keeps them, so a difference above :data:`EXPANSION_POINT_RTOL`
+    means the Taylor model would be wrong from its first coefficient: refused by name. Models
+    with free joints only expand on the same conditioned form as the exact solve (not checked).
+    """
+    from pinflex.erls import solve
+
+    if solve.supported(model):
+        return
+    exact_hz = model.frequencies(q0, y0, n_modes=max(modes), check_bounds=False)
+    exact = (2.0 * np.pi * exact_hz[np.asarray(modes) - 1]) ** 2
+    lam0 = np.asarray(lam0, dtype=float)
+    rel = np.abs(lam0 - exact) / exact
+    bad = ~(rel <= EXPANSION_POINT_RTOL)
+    if np.any(bad):
+        i = int(np.argmax(np.where(np.isfinite(rel), rel, np.inf)))
+        raise EigenSolverError(
+            f"mode {modes[i]} at the expansion point: the Taylor route's eigenvalue "
+            f"{lam0[i]:.6g} rad²/s² differs from the exact modal solve's {exact[i]:.6g} by "
+            f"{rel[i]:.2g} (relative; tolerance {EXPANSION_POINT_RTOL:g}): its pencil loses "
+            "digits at this point (a joint spring far softer than the beams, or a fine mesh); "
+            "use the exact model (frequencies(), modes()) for this mode, stiffen or free the "
+            "spring, or use fewer elements"
+        )
 
 
 def _expansion_jets(model, q0, y0, order, joints, design, idx, solver):
@@ -98,7 +137,8 @@ def _expansion_jets(model, q0, y0, order, joints, design, idx, solver):
         if solver and K.ndim == 2 and not model.plan.conditions.locked_joints:
             w, V = expansion_eigenpairs(model, M[0])
         elif solver:  # design-dependent stiffness, springs or locks: not the plain layout
-            w, V = solver_design.expansion_eigenpairs(model, K if K.ndim == 2 else K[0], M[0])
+            w, V = solver_design.expansion_eigenpairs(model, K if K.ndim == 2 else K[0], M[0],
+                                                      idx)
         else:
             w, V = sla.eigh(K[0], M[0], check_finite=False)
     except np.linalg.LinAlgError as exc:
@@ -113,7 +153,7 @@ def _expansion_jets(model, q0, y0, order, joints, design, idx, solver):
     big = np.argmax(np.abs(V), axis=0)
     V = V * np.sign(V[big, np.arange(V.shape[1])])
     try:
-        lam, _ = eigen_jets(rspace, M, K, idx, eigvals0=w, eigvecs0=V)
+        lam, _ = eigen_jets(rspace, M, K, idx, eigvals0=w, eigvecs0=V, n_rigid=model.n_rigid)
     except RepeatedEigenvalue as exc:
         if solver:
             raise _SolverRefused(exc) from exc

@@ -34,14 +34,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from pinflex import beam
 from pinflex.erls import design as erls_design
 from pinflex.erls import eigensolve, solve
+from pinflex.erls.solve_conditions import link_blocks, parent_rows
+from pinflex.erls.solve_conditions import link_mass as _link_mass
+from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
 from pinflex.parametric.algebra import SparseJetAlgebra
 from pinflex.parametric.design import _separable_pairs, channel_jets
 
-_K_NAMES = ("EA", "GJ", "EIy", "EIz")
+__all__ = ["add_terms", "covered", "expansion_eigenpairs", "link_blocks", "spring_rows"]
 
 
 def covered(model) -> bool:
@@ -53,98 +55,12 @@ def covered(model) -> bool:
     return model.nx > 0
 
 
-def _unit_tip(spec, name: str, nd: np.ndarray) -> np.ndarray:
-    """Clamped-tip block of the element stiffness per unit of rigidity ``name``."""
-    le = spec.length_m / spec.elements
-    args = [0.0, 0.0, 0.0, 0.0]
-    args[_K_NAMES.index(name)] = 1.0
-    return beam.element_stiffness(le, *args)[6:, 6:][np.ix_(nd, nd)]
-
-
-def link_blocks(model) -> dict:
-    """Per design channel of a beam, its constant solver-coordinate block (cached).
-
-    Returns ``{channel index: block}``: for a stiffness channel the per-element ``K̂_c``
-    (r × r), for a mass channel the six blocks ``(H_oo, H_oe, H_ov, H_ee, H_ev, H_vv)``.
-    """
-    return model.workspace().cached("solver_design_blocks", lambda: _build_link_blocks(model))
-
-
-def _build_link_blocks(model) -> dict:
-    plan = solve.solve_plan(model)
-    out: dict = {}
-    for n, ch in enumerate(model.design_channels):
-        if ch.name == "stiffness":
-            continue
-        core = plan.cores[ch.owner]
-        bp = model.plan.beams[ch.owner]
-        spec = bp.spec
-        rows = np.asarray(bp.rows)
-        N = spec.elements
-        r = rows.size // (N + 1)
-        nd = rows[:r]
-        if ch.kind == "K":
-            le = spec.length_m / N
-            sec = spec.section
-            ke = beam.element_stiffness(le, spec.E * sec.A, spec.G * sec.J, spec.E * sec.Iy,
-                                        spec.E * sec.Iz)
-            Dt = np.linalg.cholesky(ke[6:, 6:][np.ix_(nd, nd)]).T  # as solve_plan
-            zinv = np.linalg.inv(Dt)
-            blk = zinv.T @ _unit_tip(spec, ch.name, nd) @ zinv
-            out[n] = 0.5 * (blk + blk.T)
-            continue
-        A = np.concatenate([core.C, core.R, bp.jac], axis=1)[rows]
-        H = A.T @ (ch.unit @ A)
-        H = 0.5 * (H + H.T)
-        o = core.stop - core.start
-        out[n] = (H[:o, :o], H[:o, o : o + 6], H[:o, o + 6 :], H[o : o + 6, o : o + 6],
-                  H[o : o + 6, o + 6 :], H[o + 6 :, o + 6 :])
-    return out
-
-
-def _link_mass(core, H, J, ep, alg, nx: int, nv: int, nd: int) -> np.ndarray:
-    """One link's part of the solver-coordinate mass with blocks ``H`` (as :func:`solve.mass`)."""
-    H_oo, H_oe, H_ov, H_ee, H_ev, H_vv = H
-    mm, c0 = alg.mm, alg.const_at
-    out = np.zeros((alg.size, nd, nd))
-    a, z = core.start, core.stop
-    out[c0, a:z, a:z] += H_oo
-    if nv:
-        X = H_ov @ J
-        out[:, a:z, nx:] += X
-        out[:, nx:, a:z] += np.swapaxes(X, -1, -2)
-        out[:, nx:, nx:] += mm(np.swapaxes(J, -1, -2), H_vv @ J)
-    if ep is not None:
-        w = ep.shape[-1]
-        X = H_oe @ ep
-        out[:, a:z, :w] += X
-        out[:, :w, a:z] += np.swapaxes(X, -1, -2)
-        epT = np.swapaxes(ep, -1, -2)
-        out[:, :w, :w] += mm(epT, H_ee @ ep)
-        if nv:
-            X = mm(epT, H_ev @ J)
-            out[:, :w, nx:] += X
-            out[:, nx:, :w] += np.swapaxes(X, -1, -2)
-    return out
-
-
 def spring_rows(model, terms, alg, twists, sources, joint) -> np.ndarray:
     """``g`` (lead, 1, nd): the joint's physical relative motion over ``[w; q]``."""
     plan = solve.solve_plan(model)
     nx, nd = plan.nx, plan.nx + plan.nv
-    k = next(i for i, j in enumerate(model.plan.joints) if j is joint)
-    tw = twists[joint.parent]
-    e_full = None
-    if tw is not None:
-        e = solve.explicit_twist(tw, sources, alg)
-        e_full = np.zeros((alg.size, 6, nx))
-        e_full[:, :, : e.shape[-1]] = e
-    tau = solve.attach_twist(plan.joint_attach[k], e_full, alg, nx)
     g = np.zeros((alg.size, 1, nd))
-    if tau is not None:
-        a = joint.R_o @ joint.axis  # the joint axis in parent link axes
-        part = tau[:, 3:] if joint.kind == "revolute" else tau[:, :3]
-        g[:, 0, :nx] = -np.einsum("i,lix->lx", a, part)
+    g[:, 0, :nx] = -parent_rows(model, plan, alg, twists, sources, [joint])[:, 0]
     g[alg.const_at, 0, nx:] += model.coord_map[joint.user_col]
     return g
 
@@ -288,7 +204,7 @@ def _eliminate_locks(model, space: JetSpace, terms, salg, twists, sources, emb, 
     return Mm, 0.5 * (Km + np.swapaxes(Km, 1, 2))
 
 
-def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
+def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray, modes=()):
     """All eigenpairs of the solver-coordinate pencil ``(K0, M0)`` at the expansion point.
 
     ``K0`` is positive definite on the elastic coordinates (``w`` and the spring joints' ``q``)
@@ -299,12 +215,15 @@ def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
     condensed out of the mass, and the symmetric ``B = M_uu − M_uf M_ff⁻¹ M_fu`` gives
     ``μ = 1/λ``. A constant change of coordinates of one pencil: eigenvalues unchanged.
 
+    Modes the inverse form does not resolve (a spring far softer than the beams) are taken
+    from a direct solve of the same pencil (:func:`_high_modes_direct`); those of them in
+    ``modes`` (indices into the returned ``w``) are polished by inverse iteration, so their
+    residual is at the rounding level the eigenpair jets require.
+
     Returns:
         ``(w, V)``: eigenvalues ascending (free joints' zeros first) and mass-normalised
         shapes over ``[w; q]`` (columns in the order of ``w``).
     """
-    from pinflex.exceptions import ConfigurationError
-
     nd = K0.shape[0]
     nx = model.nx
     Z = None
@@ -331,18 +250,61 @@ def expansion_eigenpairs(model, K0: np.ndarray, M0: np.ndarray):
     mu, U = np.linalg.eigh(0.5 * (B + B.T))
     mu, U = mu[::-1], U[:, ::-1]
     bad = ~(mu > eigensolve.noise_level(mu))
-    if np.any(bad):
-        raise ConfigurationError(
-            f"the highest {int(bad.sum())} modes at the expansion point are not resolved in "
-            "solver coordinates; use fewer elements"
-        )
-    phi_u = U / np.sqrt(mu)
+    phi_u = U / np.sqrt(np.where(bad, 1.0, mu))
     V = np.zeros((nd, nd))
     nf = fr.size
     V[e, nf:] = Linv.T @ phi_u
     if nf:
         V[fr, nf:] = -np.linalg.solve(Mff, Muf.T @ phi_u)
         V[fr, :nf] = np.linalg.inv(Lf.T)
+    lam = np.concatenate([np.zeros(nf), 1.0 / np.where(bad, 1.0, mu)])
+    if np.any(bad):
+        lam, V = _high_modes_direct(K0, M0, lam, V, mu, nf, modes)
     if Z is not None:
         V = Z @ V
-    return np.concatenate([np.zeros(nf), 1.0 / mu]), V
+    return lam, V
+
+
+def _high_modes_direct(K0, M0, lam, V, mu, nf, polish=()):
+    """Modes the inverse form leaves unresolved (or resolves worse), from a direct solve.
+
+    Mode ``j`` of the inverse form carries a relative rounding error ``~ ε λ_j/λ_1``, of the
+    direct (Cholesky of the mass) solve of the same pencil ``~ ε λ_max/λ_j``: a spring far
+    softer than the beams puts a huge ``μ`` first and leaves the highest modes of the inverse
+    form below its rounding level (they were refused, and the expansion fell back to the nodal
+    pencil, which lost the spring mode: 0.86 % at 1e-4 N m/rad). From the first mode where the
+    direct solve is the better one, the modes are taken from it: same pencil and coordinates,
+    same mass normalisation. Its pairs have residuals ``~ ε λ_max``; those in ``polish`` get
+    two steps of inverse iteration with the Rayleigh quotient.
+    """
+    import scipy.linalg
+
+    lam_d, V_d = scipy.linalg.eigh(0.5 * (K0 + K0.T), 0.5 * (M0 + M0.T), check_finite=False)
+    lam_d, V_d = lam_d[nf:], V_d[:, nf:]  # the free joints' zeros first
+    ne = lam_d.size
+    tiny = np.finfo(float).tiny
+    inv_err = np.where(mu > eigensolve.noise_level(mu), lam[nf:] / max(lam[nf], tiny), np.inf)
+    with np.errstate(divide="ignore", over="ignore"):
+        dir_err = np.abs(lam_d[-1]) / np.abs(lam_d)
+    better = np.flatnonzero(dir_err < inv_err)
+    j0 = int(better[0]) if better.size else ne
+    if np.any(~(lam_d[j0:] > 64.0 * np.finfo(float).eps * abs(lam_d[-1]))):
+        raise ConfigurationError(
+            f"modes {nf + j0 + 1}.. at the expansion point are resolved neither in solver "
+            "coordinates nor by a direct solve; use fewer elements"
+        )
+    lam = lam.copy()
+    V = V.copy()
+    lam[nf + j0 :] = lam_d[j0:]
+    V[:, nf + j0 :] = V_d[:, j0:]
+    for j in polish:
+        if j < nf + j0:
+            continue
+        x = V[:, j]
+        for _ in range(2):  # inverse iteration, shift at the current eigenvalue
+            lu = scipy.linalg.lu_factor(K0 - lam[j] * M0, check_finite=False)  # near-singular
+            y = scipy.linalg.lu_solve(lu, M0 @ x, check_finite=False)
+            x = y / np.sqrt(y @ M0 @ y)
+            lam[j] = float(x @ K0 @ x)
+        V[:, j] = x
+    return lam, V
