@@ -12,9 +12,12 @@ from pinflex.exceptions import (
     DampingNotRepresentable,
     JointLimitsExceeded,
     LinkTooShort,
+    LumpedFitWarning,
+    TooFewSegments,
     TooManyModes,
 )
 from pinflex.lumped import LinkSegments, build, equal_lumped, fit_lumped, layout_of, map_damping
+from pinflex.lumped.fidelity import segments_for_tolerance
 from pinflex.lumped.fit import _compliance, _stretch_jacobian
 from pinflex.lumped.model import stretches
 from pinflex.lumped.sensitivity import mass_from_geometry, pose_geometry, station_derivatives
@@ -140,3 +143,34 @@ def test_stiffness_proportional_damping_is_exact_and_modal_damping_is_reported(a
     np.testing.assert_allclose(d.achieved, beta * omega / 2, rtol=1e-8)
     m = map_damping(lumped, [0.0, 0.0], zeta=0.02, n_modes=2)
     assert np.all(np.abs(m.achieved - 0.02) < 2e-3)
+
+
+def test_too_few_segments_are_named_with_the_mode_they_miss(arm):
+    """2 segments per link cannot shape benchmark A's locked mode 2: a named warning.
+
+    The figure it quotes is the real error, checked against the independent global FE.
+    """
+    with pytest.warns(LumpedFitWarning, match=r"mode 2, locked joints") as rec:
+        fit = fit_lumped(arm, 2, poses=[0.0, 0.0], max_evaluations=60)
+    fe_locked = planar_two_link_frequencies([0.0, 0.0], 0.125, 0.125,
+                                            joints=["clamped", "clamped"])[1][:2]
+    miss = abs(fit.lumped.frequencies([0.0, 0.0], "locked")[1] / fe_locked[1] - 1.0)
+    assert miss > 0.01
+    assert miss == pytest.approx(fit.worst_error, rel=1e-6)
+    assert f"{100 * fit.worst_error:.3g} %" in str(rec[0].message)
+
+
+def test_enough_segments_fit_without_a_warning(arm):
+    """4 segments per link meet benchmark A's two modes and compliances: no warning."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LumpedFitWarning)
+        fit = fit_lumped(arm, 4, poses=[0.0, 0.0], max_evaluations=60)
+    assert max(fit.worst_error, fit.compliance_error) < 0.01
+
+
+def test_a_tolerance_out_of_reach_names_too_few_segments(arm):
+    """--tol that no count up to --max-segments meets: TooFewSegments with the best reached."""
+    with pytest.raises(TooFewSegments, match=r"up to 3 segments.*the best was"):
+        segments_for_tolerance(arm, 1e-12, max_segments=3, max_evaluations=30)

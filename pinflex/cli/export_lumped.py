@@ -76,7 +76,7 @@ def _pct(x: float) -> str:
 def run(args: argparse.Namespace, fmt: str) -> int:
     """Fit and write the lumped export."""
     from pinflex.erls import FlexibleModel
-    from pinflex.lumped.damping import map_damping
+    from pinflex.lumped.damping import check_rayleigh, map_damping
     from pinflex.lumped.fidelity import segments_for_tolerance
     from pinflex.lumped.fit import fit_lumped
     from pinflex.lumped.layout import layout_of
@@ -94,6 +94,8 @@ def run(args: argparse.Namespace, fmt: str) -> int:
         check_file_target(path)
     if args.rayleigh is not None and args.zeta:
         raise ConfigurationError("give --zeta or --rayleigh, not both")
+    if args.rayleigh is not None:
+        check_rayleigh(args.rayleigh)  # refused before the fit, not after
     if args.segments is not None and args.segments < 1:
         raise ConfigurationError(f"--segments {args.segments}: give an integer >= 1")
     arm = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),

@@ -73,6 +73,25 @@ def modal_ratios(lumped: LumpedArm, q, damping: np.ndarray, n_modes: int) -> np.
     return (-ev.real / np.abs(ev))[:n_modes]
 
 
+def check_rayleigh(rayleigh) -> float:
+    """The beta of a Rayleigh pair ``(alpha, beta)`` a lumped export can carry.
+
+    Raises:
+        DampingNotRepresentable: ``alpha != 0``.
+        ConfigurationError: Values not finite or negative.
+    """
+    alpha, beta = (float(v) for v in rayleigh)
+    if not (np.isfinite(alpha) and np.isfinite(beta)) or beta < 0.0 or alpha < 0.0:
+        raise ConfigurationError(f"Rayleigh coefficients {tuple(rayleigh)} must be finite "
+                                 "and >= 0")
+    if alpha != 0.0:
+        raise DampingNotRepresentable(
+            f"Rayleigh damping alpha M (alpha = {alpha:g} 1/s) couples every joint of the "
+            "lumped arm and has no MJCF/URDF joint-damping equivalent; use beta only "
+            "(exact: d = beta k per joint) or modal damping (--zeta)")
+    return beta
+
+
 def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
                 rayleigh: tuple[float, float] | None = None, n_modes: int = 2) -> DampingMap:
     """Joint damping for an export (see the module docstring).
@@ -94,14 +113,7 @@ def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
     if zeta is not None and rayleigh is not None:
         raise ConfigurationError("give modal damping (zeta) or Rayleigh damping, not both")
     if rayleigh is not None:
-        alpha, beta = (float(v) for v in rayleigh)
-        if not (np.isfinite(alpha) and np.isfinite(beta)) or beta < 0.0 or alpha < 0.0:
-            raise ConfigurationError(f"Rayleigh coefficients {rayleigh} must be finite and >= 0")
-        if alpha != 0.0:
-            raise DampingNotRepresentable(
-                f"Rayleigh damping alpha M (alpha = {alpha:g} 1/s) couples every joint of the "
-                "lumped arm and has no MJCF/URDF joint-damping equivalent; use beta only "
-                "(exact: d = beta k per joint) or modal damping (--zeta)")
+        beta = check_rayleigh(rayleigh)
         d = base + beta * k
         return DampingMap("rayleigh", d, np.full(n_modes, np.nan),
                           modal_ratios(lumped, q, d, n_modes),

@@ -32,6 +32,7 @@ when a trajectory has more samples than ``max_fit_poses``) and both conditions, 
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -42,6 +43,7 @@ from pinflex.exceptions import (
     ConfigurationError,
     JointLimitsExceeded,
     LinkTooShort,
+    LumpedFitWarning,
     TooManyModes,
 )
 from pinflex.lumped.layout import ArmLayout, layout_of
@@ -323,7 +325,8 @@ def default_modes(layout: ArmLayout) -> int:
 def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
                max_fit_poses: int = 8, prior: float = 1e-6, compliance_weight: float = 0.1,
                max_evaluations: int = 400, axial: bool = False, layout: ArmLayout | None = None,
-               erls: Mapping[str, np.ndarray] | None = None) -> LumpedFit:
+               erls: Mapping[str, np.ndarray] | None = None,
+               warn_above: float | None = 0.01) -> LumpedFit:
     """Fit hinge stations and stiffnesses of a lumped arm to the arm's ERLS frequencies.
 
     Args:
@@ -345,9 +348,16 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
             :func:`~pinflex.lumped.layout.layout_of`); ignored when ``layout`` is given.
         layout: The arm's layout if already read (:func:`~pinflex.lumped.layout.layout_of`).
         erls: Precomputed ERLS frequencies ``{condition: (n, >= k)}`` at ``poses``.
+        warn_above: Warn (:class:`~pinflex.exceptions.LumpedFitWarning`) when the worst
+            frequency error or the compliance error exceeds this [-] (default 1 %); None: no
+            warning (the errors are reported on the fit either way).
 
     Returns:
         The :class:`LumpedFit`.
+
+    Warns:
+        LumpedFitWarning: The fit misses by more than ``warn_above``: too few segments for
+            the modes and poses asked; the message names the worst mode and condition.
 
     Raises:
         LinkTooShort: A link cannot hold its segments.
@@ -489,7 +499,7 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
         return {c: np.abs(hz[c] / erls[c] - 1.0).max(axis=0) for c in conditions}
 
     ce, nce = compliance_errors(lumped), compliance_errors(naive)
-    return LumpedFit(
+    fit = LumpedFit(
         lumped=lumped, naive=naive, poses=P, fit_poses=fit_idx, conditions=conditions,
         n_modes=k, erls_hz=erls, lumped_hz=lumped_hz, naive_hz=naive_hz,
         worst_error=float(np.abs(err).max()), mode_errors=per_mode(lumped_hz),
@@ -499,3 +509,28 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
         n_parameters=n_par, n_quantities=n_q,
         determinacy="exactly determined" if n_par >= n_q else "over-determined",
         evaluations=evaluations[0], message=message)
+    if warn_above is not None:
+        warn_if_off(fit, warn_above, counts)
+    return fit
+
+
+def warn_if_off(fit: LumpedFit, limit: float, counts: Mapping[str, int]) -> None:
+    """Warn (:class:`LumpedFitWarning`) when the fit's errors exceed ``limit``."""
+    comp = fit.compliance_error
+    if fit.worst_error <= limit and comp <= limit:
+        return
+    c, mode = max(((c, int(np.argmax(v))) for c, v in fit.mode_errors.items()),
+                  key=lambda cm: fit.mode_errors[cm[0]][cm[1]])
+    label = "its own" if c == "own" else "locked"
+    seg = ", ".join(f"{link}: {n}" for link, n in counts.items())
+    worse = (" (worse than the equal-segment chain's "
+             f"{100 * fit.naive_worst_error:.3g} %)"
+             if fit.worst_error > fit.naive_worst_error else "")
+    warnings.warn(LumpedFitWarning(
+        f"lumped fit with segments {{{seg}}} misses the ERLS model: worst frequency error "
+        f"{100 * fit.worst_error:.3g} % (mode {mode + 1}, {label} joints, over "
+        f"{len(fit.poses)} pose(s)){worse}, static compliance error {100 * comp:.3g} %; "
+        f"allowed {100 * limit:.3g} %: too few segments for {fit.n_modes} modes; use more "
+        "segments (--segments, or --tol to pick them), fewer modes (--modes)"
+        + ("" if fit.lumped.layout.axial or fit.lumped.layout.planar
+           else ", or axial springs (--axial)")), stacklevel=3)
