@@ -56,6 +56,7 @@ from pinflex.lumped.model import (
     stretches,
 )
 from pinflex.lumped.sensitivity import mass_from_geometry, pose_geometry, station_derivatives
+from pinflex.lumped.shapes import mismatches, pairing
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,12 @@ class LumpedFit:
             the fit) or 'over-determined'.
         evaluations: Residual evaluations of the search.
         message: The solver's message.
+        mode_mac: ``{condition: (k,)}`` smallest MAC over the fitted poses between each
+            ERLS mode and the lumped mode its frequency is matched to (1: the same shape;
+            :mod:`pinflex.lumped.shapes`); empty when not checked.
+        shape_mismatches: ``(condition, pose index, ERLS mode, closest lumped mode, MAC of
+            the matched pair, MAC with the closest other)`` for every matched pair that is
+            not the same mode (0-based modes).
     """
 
     lumped: LumpedArm
@@ -107,6 +114,8 @@ class LumpedFit:
     determinacy: str
     evaluations: int
     message: str = field(default="")
+    mode_mac: Mapping[str, np.ndarray] = field(default_factory=dict)
+    shape_mismatches: tuple[tuple[str, int, int, int, float, float], ...] = ()
 
     def summary(self) -> dict:
         """The fit as plain data (JSON-ready): segments, stiffnesses, errors."""
@@ -139,6 +148,8 @@ class LumpedFit:
             "n_quantities": self.n_quantities,
             "determinacy": self.determinacy,
             "evaluations": self.evaluations,
+            "mode_mac": {c: v.tolist() for c, v in self.mode_mac.items()},
+            "shape_mismatches": [list(m) for m in self.shape_mismatches],
         }
 
     def to_json(self) -> str:
@@ -326,7 +337,7 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
                max_fit_poses: int = 8, prior: float = 1e-6, compliance_weight: float = 0.1,
                max_evaluations: int = 400, axial: bool = False, layout: ArmLayout | None = None,
                erls: Mapping[str, np.ndarray] | None = None,
-               warn_above: float | None = 0.01) -> LumpedFit:
+               warn_above: float | None = 0.01, check_shapes: bool = True) -> LumpedFit:
     """Fit hinge stations and stiffnesses of a lumped arm to the arm's ERLS frequencies.
 
     Args:
@@ -351,13 +362,17 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
         warn_above: Warn (:class:`~pinflex.exceptions.LumpedFitWarning`) when the worst
             frequency error or the compliance error exceeds this [-] (default 1 %); None: no
             warning (the errors are reported on the fit either way).
+        check_shapes: Compare the matched modes' shapes at the fitted poses (MAC on the
+            beams' node translations, :mod:`pinflex.lumped.shapes`); a pair that is not the
+            same mode is reported in ``shape_mismatches`` and warned about.
 
     Returns:
         The :class:`LumpedFit`.
 
     Warns:
         LumpedFitWarning: The fit misses by more than ``warn_above``: too few segments for
-            the modes and poses asked; the message names the worst mode and condition.
+            the modes and poses asked; the message names the worst mode and condition. Or a
+            matched frequency belongs to a different mode shape (``check_shapes``).
 
     Raises:
         LinkTooShort: A link cannot hold its segments.
@@ -499,6 +514,8 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
         return {c: np.abs(hz[c] / erls[c] - 1.0).max(axis=0) for c in conditions}
 
     ce, nce = compliance_errors(lumped), compliance_errors(naive)
+    mode_mac, mismatched = (_shape_check(arm, lumped, P[fit_idx], fit_idx, conditions, k)
+                            if check_shapes else ({}, ()))
     fit = LumpedFit(
         lumped=lumped, naive=naive, poses=P, fit_poses=fit_idx, conditions=conditions,
         n_modes=k, erls_hz=erls, lumped_hz=lumped_hz, naive_hz=naive_hz,
@@ -508,10 +525,38 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
         naive_compliance_error=float(np.abs(nce).max()) if nce.size else 0.0,
         n_parameters=n_par, n_quantities=n_q,
         determinacy="exactly determined" if n_par >= n_q else "over-determined",
-        evaluations=evaluations[0], message=message)
+        evaluations=evaluations[0], message=message, mode_mac=mode_mac,
+        shape_mismatches=mismatched)
+    if mismatched and warn_above is not None:
+        c, pose, i, j, own, other = mismatched[0]
+        label = "its own" if c == "own" else "locked"
+        warnings.warn(LumpedFitWarning(
+            f"lumped mode {i + 1} ({label} joints, pose {pose}) is matched by frequency to ERLS "
+            f"mode {i + 1} but is not its shape (MAC {own:.3f}"
+            + (f"; it resembles mode {j + 1}: MAC {other:.3f}" if j != i else "")
+            + f"); {len(mismatched)} such pair(s): the frequency errors do not describe the "
+            "modes; use more segments, fewer modes (--modes)"
+            + ("" if layout.axial or layout.planar else ", or axial springs (--axial)")),
+            stacklevel=2)
     if warn_above is not None:
         warn_if_off(fit, warn_above, counts)
     return fit
+
+
+def _shape_check(arm, lumped: LumpedArm, poses: np.ndarray, indices, conditions, k: int):
+    """Smallest matched-pair MAC per mode and condition, and the mismatched pairs."""
+    models = {"own": arm}
+    if "locked" in conditions:
+        models["locked"] = locked_twin(arm)
+    mode_mac, bad = {}, []
+    for c in conditions:
+        diag = []
+        for p, q in zip(indices, poses):
+            mac = pairing(models[c].modes(q, n_modes=k), lumped, q, c, k)
+            diag.append(np.diag(mac))
+            bad += [(c, int(p), *m) for m in mismatches(mac)]
+        mode_mac[c] = np.min(diag, axis=0)
+    return mode_mac, tuple(bad)
 
 
 def warn_if_off(fit: LumpedFit, limit: float, counts: Mapping[str, int]) -> None:
