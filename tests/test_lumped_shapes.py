@@ -95,3 +95,28 @@ def test_mac_of_hand_made_vectors():
     np.testing.assert_allclose(mac, [[0.0, 1.0], [1.0, 0.0]])
     assert [m[:2] for m in mismatches(mac)] == [(0, 1), (1, 0)]
     assert mismatches(mac_matrix(a, a)) == []
+
+
+def test_close_bending_planes_matched_crosswise_on_the_z1_are_named():
+    """Z1 tubes, locked joints: the fit's modes 3, 4 pair crosswise; shapes say so, it warns.
+
+    Modes 3, 4 (203.4, 206.6 Hz) are one link's two bending planes. The crosswise pairing
+    is read off the MAC matrix built here from the two models' node translations
+    (independent of the fit's own check).
+    """
+    from conftest import ROOT
+
+    from pinflex.exceptions import LumpedFitWarning
+    from pinflex.lumped.shapes import erls_translations
+
+    z1 = FlexibleModel(ROOT / "urdf" / "z1_tubes.xml")
+    q = np.zeros(z1.nv)
+    with pytest.warns(LumpedFitWarning, match=r"lumped mode 3 \(locked joints.*resembles mode 4"):
+        fit = fit_lumped(z1, 3, poses=q, axial=True, max_evaluations=60)
+    erls = locked_twin(z1).modes(q, n_modes=4)
+    pos, ue = erls_translations(erls)
+    ul = node_translations(fit.lumped, q, fit.lumped.modes(q, "locked")[1][:, :4], pos)
+    mac = mac_matrix(ue, ul)
+    assert min(mac[2, 3], mac[3, 2]) > 0.7 and max(mac[2, 2], mac[3, 3]) < 0.3, mac
+    assert {(m[0], m[2], m[3]) for m in fit.shape_mismatches} >= {("locked", 2, 3),
+                                                                 ("locked", 3, 2)}

@@ -56,7 +56,7 @@ from pinflex.lumped.model import (
     stretches,
 )
 from pinflex.lumped.sensitivity import mass_from_geometry, pose_geometry, station_derivatives
-from pinflex.lumped.shapes import mismatches, pairing
+from pinflex.lumped.shapes import REPEATED, mismatches, pairing
 
 
 @dataclass(frozen=True)
@@ -552,9 +552,13 @@ def _shape_check(arm, lumped: LumpedArm, poses: np.ndarray, indices, conditions,
     for c in conditions:
         diag = []
         for p, q in zip(indices, poses):
-            mac = pairing(models[c].modes(q, n_modes=k), lumped, q, c, k)
+            result = models[c].modes(q, n_modes=k)
+            mac = pairing(result, lumped, q, c, k)
             diag.append(np.diag(mac))
-            bad += [(c, int(p), *m) for m in mismatches(mac)]
+            f = result.freq_hz
+            # within a repeated frequency any basis is a valid set of shapes: no mismatch
+            bad += [(c, int(p), *m) for m in mismatches(mac)
+                    if abs(f[m[1]] - f[m[0]]) > REPEATED * f[m[0]]]
         mode_mac[c] = np.min(diag, axis=0)
     return mode_mac, tuple(bad)
 

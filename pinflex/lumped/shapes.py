@@ -19,6 +19,10 @@ from pinflex.lumped.model import LumpedArm, segment_of
 #: A matched pair whose MAC falls below this is reported as a different shape.
 MIN_MAC = 0.8
 
+#: ERLS frequencies closer than this (relative) are one repeated frequency: any basis of
+#: their shapes is valid, so a pair inside it is not a mismatch.
+REPEATED = 1e-6
+
 
 def node_translations(lumped: LumpedArm, q, shapes: np.ndarray,
                       node_positions) -> np.ndarray:
