@@ -97,12 +97,13 @@ def test_mac_of_hand_made_vectors():
     assert mismatches(mac_matrix(a, a)) == []
 
 
-def test_close_bending_planes_matched_crosswise_on_the_z1_are_named():
-    """Z1 tubes, locked joints: the fit's modes 3, 4 pair crosswise; shapes say so, it warns.
+def test_close_bending_planes_on_the_z1_pair_by_shape(tmp_path):
+    """Z1 tubes, locked joints: modes 3, 4 (203.4, 206.6 Hz) are one link's two bending planes.
 
-    Modes 3, 4 (203.4, 206.6 Hz) are one link's two bending planes. The crosswise pairing
-    is read off the MAC matrix built here from the two models' node translations
-    (independent of the fit's own check).
+    Paired by order, the fit matches the two frequencies crosswise (each plane's stiffness
+    off); the shapes say so and the fit warns. Paired by shape (the default), every pair is
+    its own mode and the frequencies, paired here by the test's own MAC matrix of the two
+    models' node translations, are within the fit's stated error.
     """
     from conftest import ROOT
 
@@ -111,12 +112,24 @@ def test_close_bending_planes_matched_crosswise_on_the_z1_are_named():
 
     z1 = FlexibleModel(ROOT / "urdf" / "z1_tubes.xml")
     q = np.zeros(z1.nv)
-    with pytest.warns(LumpedFitWarning, match=r"lumped mode 3 \(locked joints.*resembles mode 4"):
-        fit = fit_lumped(z1, 3, poses=q, axial=True, max_evaluations=60)
     erls = locked_twin(z1).modes(q, n_modes=4)
     pos, ue = erls_translations(erls)
-    ul = node_translations(fit.lumped, q, fit.lumped.modes(q, "locked")[1][:, :4], pos)
-    mac = mac_matrix(ue, ul)
+
+    def own_mac(lumped):
+        return mac_matrix(ue, node_translations(lumped, q, lumped.modes(q, "locked")[1][:, :4],
+                                                pos))
+
+    with pytest.warns(LumpedFitWarning, match=r"ERLS mode 3 \(locked joints.*resembles mode 4"):
+        by_order = fit_lumped(z1, 3, poses=q, axial=True, max_evaluations=60,
+                              pair_by_shape=False)
+    mac = own_mac(by_order.lumped)
     assert min(mac[2, 3], mac[3, 2]) > 0.7 and max(mac[2, 2], mac[3, 3]) < 0.3, mac
-    assert {(m[0], m[2], m[3]) for m in fit.shape_mismatches} >= {("locked", 2, 3),
-                                                                 ("locked", 3, 2)}
+    assert {(m[0], m[2], m[3]) for m in by_order.shape_mismatches} >= {("locked", 2, 3),
+                                                                      ("locked", 3, 2)}
+    fit = fit_lumped(z1, 3, poses=q, axial=True, max_evaluations=60)
+    assert fit.shape_mismatches == ()
+    mac = own_mac(fit.lumped)
+    partner = np.argmax(mac, axis=1)
+    f = fit.lumped.frequencies(q, "locked")[:4][partner]
+    assert np.all(np.abs(f / erls.freq_hz - 1.0) <= fit.worst_error + 1e-12)
+    assert fit.worst_error < 1e-3 and fit.compliance_error < 1e-2

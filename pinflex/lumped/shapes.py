@@ -13,11 +13,16 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from scipy.optimize import linear_sum_assignment
 
 from pinflex.lumped.model import LumpedArm, segment_of
 
 #: A matched pair whose MAC falls below this is reported as a different shape.
 MIN_MAC = 0.8
+
+#: Pairing by shape replaces pairing by order only when it raises the summed MAC of the
+#: pairs by more than this (a clear swap, not the noise of near-equal shapes).
+PAIR_MARGIN = 0.2
 
 #: ERLS frequencies closer than this (relative) are one repeated frequency: any basis of
 #: their shapes is valid, so a pair inside it is not a mismatch.
@@ -96,3 +101,39 @@ def mismatches(mac: np.ndarray) -> list[tuple[int, int, float, float]]:
         if mac[i, i] < MIN_MAC or other > mac[i, i]:
             out.append((i, j if other > mac[i, i] else i, float(mac[i, i]), float(other)))
     return out
+
+
+class ErlsShapes:
+    """The ERLS modes of one pose and condition as :func:`shape_order` reads them.
+
+    Attributes:
+        positions: ``{flexible link: (P, 3)}`` undeformed node positions (root first) [m].
+        translations: (3 P_total, k) world node translations of the k lowest modes.
+        freq_hz: (k,) their frequencies [Hz].
+    """
+
+    def __init__(self, result, k: int):
+        self.positions, ue = erls_translations(result)
+        self.translations = ue[:, :k]
+        self.freq_hz = np.asarray(result.freq_hz[:k])
+
+
+def shape_order(lumped: LumpedArm, q, shapes: np.ndarray, erls: ErlsShapes) -> np.ndarray:
+    """Which of the k lowest lumped modes is each ERLS mode (order (k,) of lumped indices).
+
+    The assignment maximising the summed MAC, used only when it beats the plain order by
+    more than :data:`PAIR_MARGIN` and swaps no modes of a repeated ERLS frequency; else the
+    plain order.
+    """
+    k = erls.translations.shape[1]
+    mac = mac_matrix(erls.translations,
+                     node_translations(lumped, q, shapes[:, :k], erls.positions))
+    rows, cols = linear_sum_assignment(-mac)
+    order = cols[np.argsort(rows)]
+    plain = np.arange(k)
+    if mac[plain, order].sum() <= np.trace(mac) + PAIR_MARGIN:
+        return plain
+    f = erls.freq_hz
+    if any(abs(f[m] - f[order[m]]) <= REPEATED * f[m] for m in plain if order[m] != m):
+        return plain
+    return order
