@@ -342,5 +342,13 @@ class LumpedFitWarning(PinflexWarning):
     """
 
 
+class LumpedDampingWarning(PinflexWarning):
+    """Modal damping mapped to joint damping reaches ratios far from the ones asked.
+
+    A diagonal joint damping cannot give every mode the same ratio; the message names the
+    modes and the ratios reached (also in the export's report).
+    """
+
+
 class OutputExists(OutputError):
     """An output file exists and overwriting it was not allowed (``--force``)."""

@@ -19,14 +19,18 @@ joint coordinates; the lumped arm's K is diagonal on the same coordinates, so:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import lsq_linear
 
-from pinflex.exceptions import ConfigurationError, DampingNotRepresentable
+from pinflex.exceptions import ConfigurationError, DampingNotRepresentable, LumpedDampingWarning
 from pinflex.lumped.model import LumpedArm
+
+#: Modal ratios reached further than this (relative) from the target are warned about.
+RATIO_TOLERANCE = 0.2
 
 
 @dataclass(frozen=True)
@@ -106,6 +110,9 @@ def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
     Raises:
         DampingNotRepresentable: ``alpha != 0``.
         ConfigurationError: Both or invalid values.
+
+    Warns:
+        LumpedDampingWarning: Modal ratios reached more than 20 % off ``zeta``.
     """
     base = np.array(lumped.damping, dtype=float)
     k = np.asarray(lumped.stiffness)
@@ -140,7 +147,17 @@ def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
     sol = lsq_linear(lhs, rhs, bounds=(0.0, np.inf), lsmr_tol="auto", method="bvls")
     d = base.copy()
     d[hinges] += sol.x * scale
-    return DampingMap("modal", d, np.full(n_modes, zeta), modal_ratios(lumped, q, d, n_modes),
+    achieved = modal_ratios(lumped, q, d, n_modes)
+    off = np.flatnonzero(np.abs(achieved / zeta - 1.0) > RATIO_TOLERANCE)
+    if off.size:
+        warnings.warn(LumpedDampingWarning(
+            f"modal damping {zeta:g} mapped to joint damping reaches "
+            + ", ".join(f"mode {i + 1}: {achieved[i]:.3g}" for i in off)
+            + f" (more than {100 * RATIO_TOLERANCE:g} % off; all modes: "
+            f"{np.round(achieved, 4).tolist()}): a diagonal joint damping cannot give every "
+            "mode the same ratio; use stiffness-proportional damping (--rayleigh 0 BETA, "
+            "exact) or accept these ratios"), stacklevel=2)
+    return DampingMap("modal", d, np.full(n_modes, zeta), achieved,
                       f"modal: hinge damping fitted so that the lowest {n_modes} modes have "
                       f"ratio {zeta:g} at the export pose (approximate; achieved ratios "
                       "reported)")
