@@ -49,7 +49,11 @@ pin_single_thread()
 
 import numpy as np  # noqa: E402
 import scipy.linalg as sla  # noqa: E402
-from lumped_ring import ring_frequencies  # noqa: E402
+from lumped_ring import (  # noqa: E402
+    clamped_link_urdf,
+    mujoco_tip_deflection,
+    ring_frequencies,
+)
 from reference_fe import cantilever_hz  # noqa: E402
 
 from pinflex.description import parse  # noqa: E402
@@ -62,16 +66,7 @@ DT = 2e-5
 #: Transverse tip force [N] of the static case: Euler-Bernoulli tip deflection 1e-3 L.
 TIP_FORCE = 3.0 * E * I2 * 1e-3 / L**2
 
-LINK_URDF = f"""<robot name="link1" xmlns:pinflex="urn:pinflex:urdf:1">
-  <link name="base"/><link name="link1"/>
-  <joint name="q1" type="revolute"><parent link="base"/><child link="link1"/>
-    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <pinflex:joint name="q1" locked="true"/>
-  <pinflex:flexible link="link1" elements="40" tip="{L} 0 0" normal="0 0 1">
-    <pinflex:material E="{E}" linear_density="{RHOA}"/>
-    <pinflex:section A="7.07e-4" Iy="{I2}" Iz="{I2}" J="{2 * I2}"/>
-  </pinflex:flexible>
-</robot>"""
+LINK_URDF = clamped_link_urdf(L, E, I2, RHOA, 40)
 
 
 def mujoco_frequencies(mujoco, m, d):
@@ -149,25 +144,8 @@ def rod_tip_deflection(mujoco, n: int, force: float, duration: float = 0.1) -> f
 
 
 def lumped_tip_deflection(mujoco, m, force: float) -> float:
-    """Static tip deflection [m] of a lumped link MJCF under a transverse tip force [N].
-
-    From MuJoCo's own model of the written file: the tip point's translation Jacobian
-    (``mj_jac`` at the far end of the last segment's cylinder) and the joint stiffnesses,
-    ``d = J K^-1 J^T F`` (hinges about z, force along y).
-    """
-    d = mujoco.MjData(m)
-    mujoco.mj_forward(m, d)
-    g = m.ngeom - 1  # the last segment's cylinder (from its hinge to the link's tip)
-    last = int(m.geom_bodyid[g])
-    half = d.geom_xmat[g].reshape(3, 3)[:, 2] * m.geom_size[g][1]
-    ends = (d.geom_xpos[g] + half, d.geom_xpos[g] - half)
-    tip = max(ends, key=lambda p: float(np.linalg.norm(p - d.xpos[last])))  # not the hinge end
-    if abs(tip[0] - L) > 1e-9 * L:
-        raise RuntimeError(f"tip point {tip} is not the link's end")
-    jacp = np.zeros((3, m.nv))
-    mujoco.mj_jac(m, d, jacp, None, tip, last)
-    k = np.array(m.jnt_stiffness[m.dof_jntid])
-    return float(jacp[1] @ (jacp[1] / k) * force)
+    """Static tip deflection [m] of a lumped link MJCF from MuJoCo (``mj_jac``, stiffness)."""
+    return mujoco_tip_deflection(mujoco, m, force, L)
 
 
 def stepper(mujoco, m):

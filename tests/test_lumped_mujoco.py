@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 from conftest import ROOT, TWO_LINK, UR5
-from lumped_ring import quintic, ring_frequencies
+from lumped_ring import clamped_link_urdf, mujoco_tip_deflection, quintic, ring_frequencies
 from reference_fe import planar_two_link_frequencies
 
 import pinflex
@@ -159,32 +159,6 @@ def test_mujoco_rings_at_the_erls_locked_frequency_after_the_stop():
 
 
 E_LINK, I_LINK, L_LINK = 69e9, 3.97e-8, 0.6
-CLAMPED_LINK = f"""<robot name="link1" xmlns:pinflex="urn:pinflex:urdf:1">
-  <link name="base"/><link name="link1"/>
-  <joint name="q1" type="revolute"><parent link="base"/><child link="link1"/>
-    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <pinflex:joint name="q1" locked="true"/>
-  <pinflex:flexible link="link1" elements="20" tip="{L_LINK} 0 0" normal="0 0 1">
-    <pinflex:material E="{E_LINK}" linear_density="1.9"/>
-    <pinflex:section A="7.07e-4" Iy="{I_LINK}" Iz="{I_LINK}" J="{2 * I_LINK}"/>
-  </pinflex:flexible>
-</robot>"""
-
-
-def mujoco_tip_deflection(m, force: float) -> float:
-    """Static tip deflection of a clamped lumped link from MuJoCo: J K^-1 J^T F (y force)."""
-    d = mujoco.MjData(m)
-    mujoco.mj_forward(m, d)
-    g = m.ngeom - 1  # the last segment's cylinder
-    body = int(m.geom_bodyid[g])
-    half = d.geom_xmat[g].reshape(3, 3)[:, 2] * m.geom_size[g][1]
-    tip = max((d.geom_xpos[g] + half, d.geom_xpos[g] - half),
-              key=lambda p: float(np.linalg.norm(p - d.xpos[body])))
-    assert abs(tip[0] - L_LINK) < 1e-12
-    jacp = np.zeros((3, m.nv))
-    mujoco.mj_jac(m, d, jacp, None, tip, body)
-    k = np.array(m.jnt_stiffness[m.dof_jntid])
-    return float(jacp[1] @ (jacp[1] / k) * force)
 
 
 @pytest.mark.parametrize("n", [3, 4, 6])
@@ -196,14 +170,14 @@ def test_static_tip_deflection_in_mujoco_against_euler_bernoulli(n):
     e.g. 34.4 % short at n = 4 (MuJoCo's 1-D flex rod, clamped by its first edge, gives the
     same: benchmarks/bench_lumped.py).
     """
-    link = FlexibleModel(parse(CLAMPED_LINK), planar=True)
+    link = FlexibleModel(parse(clamped_link_urdf(L_LINK, E_LINK, I_LINK, 1.9, 20)), planar=True)
     fit = fit_lumped(link, n, n_modes=2, warn_above=None)
     force = 10.0
     exact = force * L_LINK**3 / (3 * E_LINK * I_LINK)
     tips = {}
     for name, arm in (("fit", fit.lumped), ("naive", fit.naive)):
         m = mujoco.MjModel.from_xml_string(lumped_mjcf(arm, [0.0], gravity=(0, 0, 0)).text)
-        tips[name] = mujoco_tip_deflection(m, force) / exact - 1.0
+        tips[name] = mujoco_tip_deflection(mujoco, m, force, L_LINK) / exact - 1.0
     assert abs(tips["fit"]) <= fit.compliance_error + 1e-9
     np.testing.assert_allclose(tips["naive"], (n - 1) * (2 * n - 1) / (2 * n**2) - 1.0,
                                rtol=1e-10)
