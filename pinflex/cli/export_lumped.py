@@ -177,6 +177,12 @@ def run(args: argparse.Namespace, fmt: str) -> int:
           f"for {fit.n_quantities} quantities: {fit.determinacy})")
     print(f"equal segments with k = EI/l (not fitted): {by_mode(fit.naive_mode_errors)}; "
           f"static compliance {_pct(fit.naive_compliance_error)}")
+    if fit.mode_mac:
+        label = {"own": "own joints", "locked": "locked joints"}
+        print("mode shapes, MAC with the ERLS modes (smallest over the fitted poses, 1 = the "
+              "same shape): " + "; ".join(
+                  f"{label[c]}: " + ", ".join(f"{m:.3f}" for m in v)
+                  for c, v in fit.mode_mac.items()))
     if damp.kind != "none":
         print(f"damping: {damp.description}; modal ratios achieved "
               f"{np.round(damp.achieved, 5).tolist()}")
