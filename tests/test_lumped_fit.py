@@ -192,8 +192,8 @@ def _state_space_ratios(lumped, q, d, n):
     return -ev.real / np.abs(ev)
 
 
-def test_modal_damping_far_from_the_target_is_named(arm, ur5):
-    """Benchmark A reaches zeta = 0.02 on both modes; the UR5 does not and is warned about."""
+def test_modal_damping_far_from_the_target_is_named(arm):
+    """Benchmark A: zeta = 0.02 on 2 modes is reached; on 4 modes it is not, and is named."""
     import warnings
 
     from pinflex.exceptions import LumpedDampingWarning
@@ -204,11 +204,10 @@ def test_modal_damping_far_from_the_target_is_named(arm, ur5):
         warnings.simplefilter("error", LumpedDampingWarning)
         d = map_damping(lumped, q, zeta=0.02, n_modes=2)
     np.testing.assert_allclose(_state_space_ratios(lumped, q, d.damping, 2), 0.02, rtol=1e-3)
-    q5 = np.array([0.0, -1.0, 1.2, -0.5, 0.7, 0.2])
-    fit = fit_lumped(ur5, 3, poses=q5, axial=True, max_evaluations=30, warn_above=None)
+    fit4 = fit_lumped(arm, 4, poses=q, n_modes=4, max_evaluations=40, warn_above=None)
     with pytest.warns(LumpedDampingWarning, match="mode 1: ") as rec:
-        d5 = map_damping(fit.lumped, q5, zeta=0.02, n_modes=fit.n_modes)
-    own = _state_space_ratios(fit.lumped, q5, d5.damping, fit.n_modes)
-    np.testing.assert_allclose(d5.achieved, own, rtol=1e-9)
+        d4 = map_damping(fit4.lumped, q, zeta=0.02, n_modes=4)
+    own = _state_space_ratios(fit4.lumped, q, d4.damping, 4)
+    np.testing.assert_allclose(d4.achieved, own, rtol=1e-9)
     assert abs(own[0] / 0.02 - 1.0) > 0.2
     assert f"mode 1: {own[0]:.3g}" in str(rec[0].message)

