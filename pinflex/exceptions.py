@@ -334,6 +334,26 @@ class DampingNotRepresentable(ConfigurationError):
     """The damping asked for has no joint-damping equivalent in an MJCF or URDF export."""
 
 
+class TooFewSegments(ConfigurationError):
+    """No lumped arm with the segments allowed meets the asked tolerance (``--tol``)."""
+
+
+class LumpedFitWarning(PinflexWarning):
+    """A fitted lumped arm misses the ERLS modes or static compliances by more than allowed.
+
+    Too few segments for the modes and poses fitted (or modes that the hinges cannot shape,
+    e.g. an axial mode without axial springs): the exported model is that far off.
+    """
+
+
+class LumpedDampingWarning(PinflexWarning):
+    """Modal damping mapped to joint damping reaches ratios far from the ones asked.
+
+    A diagonal joint damping cannot give every mode the same ratio; the message names the
+    modes and the ratios reached (also in the export's report).
+    """
+
+
 class OutputExists(OutputError):
     """An output file exists and overwriting it was not allowed (``--force``)."""
 

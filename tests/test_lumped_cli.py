@@ -25,7 +25,9 @@ def test_urdf_export_writes_the_urdf_and_its_spring_data(tmp_path, capsys):
     assert springs["format"] == "pinflex-springs/1"
     hinge = springs["joints"]["link1_h1_bz"]
     assert hinge["damping"] == pytest.approx(1e-5 * hinge["stiffness"], rel=1e-12)
-    assert "equal segments with k = EI/l" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "equal segments with k = EI/l" in out
+    assert "mode shapes, MAC with the ERLS modes" in out
     assert _export(tmp_path, "--segments", "3") == 2
     assert "exists; pass --force" in capsys.readouterr().err
     assert _export(tmp_path, "--segments", "3", "--force") == 0

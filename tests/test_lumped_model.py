@@ -120,3 +120,42 @@ def test_equal_segments_converge_to_the_cantilever_at_second_order(n):
         errs.append(abs(f[0] / exact[0] - 1.0))
     order = math.log2(errs[0] / errs[1])
     assert 1.8 < order < 2.2, (errs, order)
+
+
+def test_a_rigid_body_on_a_beam_rides_on_its_segment():
+    """A <pinflex:body> at a clamped rod's tip: in the lumped arm's mass, fitted to the ERLS modes.
+
+    The joint's inertia of the straight lumped rod (hinges at rest) equals the closed form
+    rhoA L^3/3 + m L^2 + J_z, and the fitted frequencies (joint free and locked) the ERLS
+    model's, which carries the body. Runs where the description supports bodies.
+    """
+    from pinflex.description import parse
+    from pinflex.lumped import fit_lumped
+
+    L, d, E, rho, mass, J = 0.6, 0.02, 70e9, 2700.0, 0.5, 2e-3
+    text = f"""<robot name="tip" xmlns:pinflex="urn:pinflex:urdf:1">
+  <link name="base"/><link name="rod"/>
+  <joint name="q1" type="revolute"><parent link="base"/><child link="rod"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <pinflex:flexible link="rod" elements="32" tip="{L} 0 0" normal="0 0 1">
+    <pinflex:material E="{E}" density="{rho}"/>
+    <pinflex:section shape="solid_circle" diameter="{d}"/></pinflex:flexible>
+  <pinflex:body name="tool" link="rod" xyz="{L} 0 0" mass="{mass}"
+                ixx="{J / 2}" iyy="{J / 2}" izz="{J}"/>
+</robot>"""
+    from pinflex.exceptions import PinflexError
+
+    try:
+        rod = FlexibleModel(parse(text), planar=True)
+    except PinflexError as exc:  # a build without <pinflex:body>
+        if "pinflex:body" not in str(exc):
+            raise
+        pytest.skip(f"no <pinflex:body> in this build: {exc}")
+    if not getattr(rod.plan, "bodies", ()):
+        pytest.skip("no <pinflex:body> in this build")
+    fit = fit_lumped(rod, 4, poses=[0.4])
+    M = fit.lumped.mass_matrix([0.4])
+    i = fit.lumped.arm_index[0]
+    np.testing.assert_allclose(M[i, i], rho * np.pi * d**2 / 4 * L**3 / 3 + mass * L**2 + J,
+                               rtol=1e-12)
+    assert fit.worst_error < 1e-8 and fit.compliance_error < 1e-6

@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 from conftest import ROOT, TWO_LINK, UR5
-from lumped_ring import quintic, ring_frequencies
+from lumped_ring import clamped_link_urdf, mujoco_tip_deflection, quintic, ring_frequencies
 from reference_fe import planar_two_link_frequencies
 
 import pinflex
 from pinflex import Beam, Material
 from pinflex.beam import hollow_circle
 from pinflex.cli import main
+from pinflex.description import parse
 from pinflex.erls import FlexibleModel
 from pinflex.lumped import fit_lumped, lumped_mjcf
 from pinflex.lumped.fit import locked_twin
@@ -155,3 +156,30 @@ def test_mujoco_rings_at_the_erls_locked_frequency_after_the_stop():
     measured = ring_frequencies(np.array(t), np.array(y), guess)[:2]
     erls_locked = locked_twin(arm).frequencies(q1)[:2]
     assert np.all(np.abs(measured / erls_locked - 1.0) <= fit.worst_error + 1e-6)
+
+
+E_LINK, I_LINK, L_LINK = 69e9, 3.97e-8, 0.6
+
+
+@pytest.mark.parametrize("n", [3, 4, 6])
+def test_static_tip_deflection_in_mujoco_against_euler_bernoulli(n):
+    """MuJoCo's static tip deflection of the exported link vs P L^3 / 3 EI (closed form).
+
+    The fitted link: within the fit's reported compliance error. The equal-segment chain
+    (k = EI/l, root segment clamped): its closed form (n-1)(2n-1)/(2n^2) of the beam's,
+    e.g. 34.4 % short at n = 4 (MuJoCo's 1-D flex rod, clamped by its first edge, gives the
+    same: benchmarks/bench_lumped.py).
+    """
+    link = FlexibleModel(parse(clamped_link_urdf(L_LINK, E_LINK, I_LINK, 1.9, 20)), planar=True)
+    fit = fit_lumped(link, n, n_modes=2, warn_above=None)
+    force = 10.0
+    exact = force * L_LINK**3 / (3 * E_LINK * I_LINK)
+    tips = {}
+    for name, arm in (("fit", fit.lumped), ("naive", fit.naive)):
+        m = mujoco.MjModel.from_xml_string(lumped_mjcf(arm, [0.0], gravity=(0, 0, 0)).text)
+        tips[name] = mujoco_tip_deflection(mujoco, m, force, L_LINK) / exact - 1.0
+    assert abs(tips["fit"]) <= fit.compliance_error + 1e-9
+    np.testing.assert_allclose(tips["naive"], (n - 1) * (2 * n - 1) / (2 * n**2) - 1.0,
+                               rtol=1e-10)
+    if n >= 4:
+        assert abs(tips["fit"]) < 1e-7

@@ -76,7 +76,7 @@ def _pct(x: float) -> str:
 def run(args: argparse.Namespace, fmt: str) -> int:
     """Fit and write the lumped export."""
     from pinflex.erls import FlexibleModel
-    from pinflex.lumped.damping import map_damping
+    from pinflex.lumped.damping import check_rayleigh, map_damping
     from pinflex.lumped.fidelity import segments_for_tolerance
     from pinflex.lumped.fit import fit_lumped
     from pinflex.lumped.layout import layout_of
@@ -94,6 +94,8 @@ def run(args: argparse.Namespace, fmt: str) -> int:
         check_file_target(path)
     if args.rayleigh is not None and args.zeta:
         raise ConfigurationError("give --zeta or --rayleigh, not both")
+    if args.rayleigh is not None:
+        check_rayleigh(args.rayleigh)  # refused before the fit, not after
     if args.segments is not None and args.segments < 1:
         raise ConfigurationError(f"--segments {args.segments}: give an integer >= 1")
     arm = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
@@ -175,6 +177,12 @@ def run(args: argparse.Namespace, fmt: str) -> int:
           f"for {fit.n_quantities} quantities: {fit.determinacy})")
     print(f"equal segments with k = EI/l (not fitted): {by_mode(fit.naive_mode_errors)}; "
           f"static compliance {_pct(fit.naive_compliance_error)}")
+    if fit.mode_mac:
+        label = {"own": "own joints", "locked": "locked joints"}
+        print("mode shapes, MAC with the ERLS modes (smallest over the fitted poses, 1 = the "
+              "same shape): " + "; ".join(
+                  f"{label[c]}: " + ", ".join(f"{m:.3f}" for m in v)
+                  for c, v in fit.mode_mac.items()))
     if damp.kind != "none":
         print(f"damping: {damp.description}; modal ratios achieved "
               f"{np.round(damp.achieved, 5).tolist()}")

@@ -19,14 +19,18 @@ joint coordinates; the lumped arm's K is diagonal on the same coordinates, so:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import lsq_linear
 
-from pinflex.exceptions import ConfigurationError, DampingNotRepresentable
+from pinflex.exceptions import ConfigurationError, DampingNotRepresentable, LumpedDampingWarning
 from pinflex.lumped.model import LumpedArm
+
+#: Modal ratios reached further than this (relative) from the target are warned about.
+RATIO_TOLERANCE = 0.2
 
 
 @dataclass(frozen=True)
@@ -73,6 +77,25 @@ def modal_ratios(lumped: LumpedArm, q, damping: np.ndarray, n_modes: int) -> np.
     return (-ev.real / np.abs(ev))[:n_modes]
 
 
+def check_rayleigh(rayleigh) -> float:
+    """The beta of a Rayleigh pair ``(alpha, beta)`` a lumped export can carry.
+
+    Raises:
+        DampingNotRepresentable: ``alpha != 0``.
+        ConfigurationError: Values not finite or negative.
+    """
+    alpha, beta = (float(v) for v in rayleigh)
+    if not (np.isfinite(alpha) and np.isfinite(beta)) or beta < 0.0 or alpha < 0.0:
+        raise ConfigurationError(f"Rayleigh coefficients {tuple(rayleigh)} must be finite "
+                                 "and >= 0")
+    if alpha != 0.0:
+        raise DampingNotRepresentable(
+            f"Rayleigh damping alpha M (alpha = {alpha:g} 1/s) couples every joint of the "
+            "lumped arm and has no MJCF/URDF joint-damping equivalent; use beta only "
+            "(exact: d = beta k per joint) or modal damping (--zeta)")
+    return beta
+
+
 def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
                 rayleigh: tuple[float, float] | None = None, n_modes: int = 2) -> DampingMap:
     """Joint damping for an export (see the module docstring).
@@ -87,6 +110,9 @@ def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
     Raises:
         DampingNotRepresentable: ``alpha != 0``.
         ConfigurationError: Both or invalid values.
+
+    Warns:
+        LumpedDampingWarning: Modal ratios reached more than 20 % off ``zeta``.
     """
     base = np.array(lumped.damping, dtype=float)
     k = np.asarray(lumped.stiffness)
@@ -94,14 +120,7 @@ def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
     if zeta is not None and rayleigh is not None:
         raise ConfigurationError("give modal damping (zeta) or Rayleigh damping, not both")
     if rayleigh is not None:
-        alpha, beta = (float(v) for v in rayleigh)
-        if not (np.isfinite(alpha) and np.isfinite(beta)) or beta < 0.0 or alpha < 0.0:
-            raise ConfigurationError(f"Rayleigh coefficients {rayleigh} must be finite and >= 0")
-        if alpha != 0.0:
-            raise DampingNotRepresentable(
-                f"Rayleigh damping alpha M (alpha = {alpha:g} 1/s) couples every joint of the "
-                "lumped arm and has no MJCF/URDF joint-damping equivalent; use beta only "
-                "(exact: d = beta k per joint) or modal damping (--zeta)")
+        beta = check_rayleigh(rayleigh)
         d = base + beta * k
         return DampingMap("rayleigh", d, np.full(n_modes, np.nan),
                           modal_ratios(lumped, q, d, n_modes),
@@ -128,7 +147,17 @@ def map_damping(lumped: LumpedArm, q, *, zeta: float | None = None,
     sol = lsq_linear(lhs, rhs, bounds=(0.0, np.inf), lsmr_tol="auto", method="bvls")
     d = base.copy()
     d[hinges] += sol.x * scale
-    return DampingMap("modal", d, np.full(n_modes, zeta), modal_ratios(lumped, q, d, n_modes),
+    achieved = modal_ratios(lumped, q, d, n_modes)
+    off = np.flatnonzero(np.abs(achieved / zeta - 1.0) > RATIO_TOLERANCE)
+    if off.size:
+        warnings.warn(LumpedDampingWarning(
+            f"modal damping {zeta:g} mapped to joint damping reaches "
+            + ", ".join(f"mode {i + 1}: {achieved[i]:.3g}" for i in off)
+            + f" (more than {100 * RATIO_TOLERANCE:g} % off; all modes: "
+            f"{np.round(achieved, 4).tolist()}): a diagonal joint damping cannot give every "
+            "mode the same ratio; use stiffness-proportional damping (--rayleigh 0 BETA, "
+            "exact) or accept these ratios"), stacklevel=2)
+    return DampingMap("modal", d, np.full(n_modes, zeta), achieved,
                       f"modal: hinge damping fitted so that the lowest {n_modes} modes have "
                       f"ratio {zeta:g} at the export pose (approximate; achieved ratios "
                       "reported)")

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.exceptions import ConfigurationError, LinkTooShort, TooManyModes
+from pinflex.exceptions import ConfigurationError, LinkTooShort, TooFewSegments, TooManyModes
 from pinflex.lumped.fit import LumpedFit, check_segments, default_modes, fit_lumped
 from pinflex.lumped.layout import ArmLayout, layout_of
 
@@ -58,8 +58,9 @@ def segments_for_tolerance(arm, tol: float, *, poses=None, n_modes: int | None =
         **fit_options: Passed to :func:`~pinflex.lumped.fit.fit_lumped`.
 
     Raises:
-        ConfigurationError: ``tol`` not positive, or no count up to ``max_segments`` (or up
-            to what the shortest link holds) meets it; the message gives the best reached.
+        ConfigurationError: ``tol`` not positive.
+        TooFewSegments: No count up to ``max_segments`` (or up to what the shortest link
+            holds) meets ``tol``; the message gives the best reached.
     """
     if not isinstance(tol, int | float) or not np.isfinite(tol) or tol <= 0.0:
         raise ConfigurationError(f"tol = {tol!r}: give a positive relative tolerance")
@@ -77,7 +78,7 @@ def segments_for_tolerance(arm, tol: float, *, poses=None, n_modes: int | None =
             break
         try:
             fit = fit_lumped(arm, n, poses=poses, n_modes=k, layout=layout, erls=erls,
-                             **fit_options)
+                             warn_above=None, **fit_options)
         except TooManyModes:
             continue
         erls = fit.erls_hz
@@ -88,7 +89,7 @@ def segments_for_tolerance(arm, tol: float, *, poses=None, n_modes: int | None =
     reached = (f"; the best was {max(best[1], best[2]):.3g} with {best[0]} segments"
                if best else "")
     hint = "" if layout.axial or layout.planar else " or axial springs (--axial)"
-    raise ConfigurationError(
+    raise TooFewSegments(
         f"no lumped arm with up to {levels[-1][0] if levels else n0} segments per link meets "
         f"tol = {tol:g}{reached}: raise the tolerance, allow more segments (--max-segments)"
         f"{hint}")

@@ -32,6 +32,7 @@ when a trajectory has more samples than ``max_fit_poses``) and both conditions, 
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -42,6 +43,7 @@ from pinflex.exceptions import (
     ConfigurationError,
     JointLimitsExceeded,
     LinkTooShort,
+    LumpedFitWarning,
     TooManyModes,
 )
 from pinflex.lumped.layout import ArmLayout, layout_of
@@ -54,6 +56,14 @@ from pinflex.lumped.model import (
     stretches,
 )
 from pinflex.lumped.sensitivity import mass_from_geometry, pose_geometry, station_derivatives
+from pinflex.lumped.shapes import (
+    REPEATED,
+    ErlsShapes,
+    mac_matrix,
+    mismatches,
+    node_translations,
+    shape_order,
+)
 
 
 @dataclass(frozen=True)
@@ -83,6 +93,12 @@ class LumpedFit:
             the fit) or 'over-determined'.
         evaluations: Residual evaluations of the search.
         message: The solver's message.
+        mode_mac: ``{condition: (k,)}`` smallest MAC over the fitted poses between each
+            ERLS mode and the lumped mode its frequency is matched to (1: the same shape;
+            :mod:`pinflex.lumped.shapes`); empty when not checked.
+        shape_mismatches: ``(condition, pose index, ERLS mode, closest lumped mode, MAC of
+            the matched pair, MAC with the closest other)`` for every matched pair that is
+            not the same mode (0-based modes).
     """
 
     lumped: LumpedArm
@@ -105,6 +121,8 @@ class LumpedFit:
     determinacy: str
     evaluations: int
     message: str = field(default="")
+    mode_mac: Mapping[str, np.ndarray] = field(default_factory=dict)
+    shape_mismatches: tuple[tuple[str, int, int, int, float, float], ...] = ()
 
     def summary(self) -> dict:
         """The fit as plain data (JSON-ready): segments, stiffnesses, errors."""
@@ -137,6 +155,8 @@ class LumpedFit:
             "n_quantities": self.n_quantities,
             "determinacy": self.determinacy,
             "evaluations": self.evaluations,
+            "mode_mac": {c: v.tolist() for c, v in self.mode_mac.items()},
+            "shape_mismatches": [list(m) for m in self.shape_mismatches],
         }
 
     def to_json(self) -> str:
@@ -253,11 +273,18 @@ def compliance_errors(lumped: LumpedArm) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- fitting
-def _relative_errors(lumped: LumpedArm, poses, conditions, n_modes, erls):
+def _relative_errors(lumped: LumpedArm, poses, conditions, n_modes, erls, shapes=None):
+    """Lumped frequencies paired with the ERLS modes (by shape when ``shapes`` are given)."""
     out = {}
     for c in conditions:
-        f = np.array([lumped.frequencies(q, c)[:n_modes] for q in poses])
-        out[c] = f
+        rows = []
+        for i, q in enumerate(poses):
+            lam, phi = lumped.modes(q, c)
+            f = np.sqrt(np.clip(lam[:n_modes], 0.0, None)) / (2.0 * np.pi)
+            if shapes is not None:
+                f = f[shape_order(lumped, q, phi, shapes[c][i])]
+            rows.append(f)
+        out[c] = np.array(rows)
     err = np.concatenate([(out[c] / erls[c] - 1.0).ravel() for c in conditions])
     return out, err
 
@@ -323,7 +350,8 @@ def default_modes(layout: ArmLayout) -> int:
 def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
                max_fit_poses: int = 8, prior: float = 1e-6, compliance_weight: float = 0.1,
                max_evaluations: int = 400, axial: bool = False, layout: ArmLayout | None = None,
-               erls: Mapping[str, np.ndarray] | None = None) -> LumpedFit:
+               erls: Mapping[str, np.ndarray] | None = None,
+               warn_above: float | None = 0.01, pair_by_shape: bool = True) -> LumpedFit:
     """Fit hinge stations and stiffnesses of a lumped arm to the arm's ERLS frequencies.
 
     Args:
@@ -345,9 +373,22 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
             :func:`~pinflex.lumped.layout.layout_of`); ignored when ``layout`` is given.
         layout: The arm's layout if already read (:func:`~pinflex.lumped.layout.layout_of`).
         erls: Precomputed ERLS frequencies ``{condition: (n, >= k)}`` at ``poses``.
+        warn_above: Warn (:class:`~pinflex.exceptions.LumpedFitWarning`) when the worst
+            frequency error or the compliance error exceeds this [-] (default 1 %); None: no
+            warning (the errors are reported on the fit either way).
+        pair_by_shape: Pair the lumped modes with the ERLS modes by shape (MAC of the beams'
+            node translations, :mod:`pinflex.lumped.shapes`) in the search and in the
+            reported errors, where that clearly beats pairing by order; else by order. Either
+            way the pairs are checked at the fitted poses: a pair that is not the same mode
+            is reported in ``shape_mismatches`` and warned about.
 
     Returns:
         The :class:`LumpedFit`.
+
+    Warns:
+        LumpedFitWarning: The fit misses by more than ``warn_above``: too few segments for
+            the modes and poses asked; the message names the worst mode and condition. Or a
+            matched frequency belongs to a different mode shape.
 
     Raises:
         LinkTooShort: A link cannot hold its segments.
@@ -399,6 +440,12 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
     n_q = fit_idx.size * len(conditions) * k + n_comp
     evaluations = [0]
     targets = {c: erls[c][fit_idx] for c in conditions}
+    if pair_by_shape:  # ERLS shapes at every pose (the reported errors pair by shape too)
+        shapes_all = _erls_shapes(arm, P, conditions, k)
+        shapes_fit = {c: [v[i] for i in fit_idx] for c, v in shapes_all.items()}
+    else:  # only at the fitted poses, for the check
+        shapes_all, shapes_fit = None, _erls_shapes(arm, P[fit_idx], conditions, k)
+    pair_fit = shapes_fit if pair_by_shape else None
     fit_P = P[fit_idx]
 
     def residuals(x: np.ndarray):
@@ -413,6 +460,9 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
             for c in conditions:
                 lam, phi = lumped.modes(q, c, mass=M)
                 lam, phi = lam[:k], phi[:, :k]
+                if pair_fit is not None:
+                    order = shape_order(lumped, q, phi, pair_fit[c][i])
+                    lam, phi = lam[order], phi[:, order]
                 f = np.sqrt(np.clip(lam, 1e-300, None)) / (2 * np.pi)
                 tgt = targets[c][i]
                 rows.append(f / tgt - 1.0)
@@ -482,14 +532,16 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
         weight[0] = prior
     segs, _ = _decode(layout, blocks, x)
     lumped = build(layout, segs)
-    lumped_hz, err = _relative_errors(lumped, P, conditions, k, erls)
-    naive_hz, nerr = _relative_errors(naive, P, conditions, k, erls)
+    lumped_hz, err = _relative_errors(lumped, P, conditions, k, erls, shapes_all)
+    naive_hz, nerr = _relative_errors(naive, P, conditions, k, erls, shapes_all)
 
     def per_mode(hz):
         return {c: np.abs(hz[c] / erls[c] - 1.0).max(axis=0) for c in conditions}
 
     ce, nce = compliance_errors(lumped), compliance_errors(naive)
-    return LumpedFit(
+    mode_mac, mismatched = _shape_check(lumped, P[fit_idx], fit_idx, conditions, shapes_fit,
+                                        pair_by_shape)
+    fit = LumpedFit(
         lumped=lumped, naive=naive, poses=P, fit_poses=fit_idx, conditions=conditions,
         n_modes=k, erls_hz=erls, lumped_hz=lumped_hz, naive_hz=naive_hz,
         worst_error=float(np.abs(err).max()), mode_errors=per_mode(lumped_hz),
@@ -498,4 +550,72 @@ def fit_lumped(arm, segments, *, poses=None, n_modes: int | None = None,
         naive_compliance_error=float(np.abs(nce).max()) if nce.size else 0.0,
         n_parameters=n_par, n_quantities=n_q,
         determinacy="exactly determined" if n_par >= n_q else "over-determined",
-        evaluations=evaluations[0], message=message)
+        evaluations=evaluations[0], message=message, mode_mac=mode_mac,
+        shape_mismatches=mismatched)
+    if mismatched and warn_above is not None:
+        c, pose, i, j, own, other = mismatched[0]
+        label = "its own" if c == "own" else "locked"
+        warnings.warn(LumpedFitWarning(
+            f"the lumped mode matched to ERLS mode {i + 1} ({label} joints, pose {pose}) is "
+            f"not its shape (MAC {own:.3f}"
+            + (f"; it resembles mode {j + 1}: MAC {other:.3f}" if j != i else "")
+            + f"); {len(mismatched)} such pair(s): the frequency errors do not describe the "
+            "modes; use more segments, fewer modes (--modes)"
+            + ("" if layout.axial or layout.planar else ", or axial springs (--axial)")),
+            stacklevel=2)
+    if warn_above is not None:
+        warn_if_off(fit, warn_above, counts)
+    return fit
+
+
+def _erls_shapes(arm, poses, conditions, k: int):
+    """``{condition: [ErlsShapes per pose]}``."""
+    models = {"own": arm}
+    if "locked" in conditions:
+        models["locked"] = locked_twin(arm)
+    return {c: [ErlsShapes(models[c].modes(q, n_modes=k), k) for q in poses]
+            for c in conditions}
+
+
+def _shape_check(lumped: LumpedArm, poses: np.ndarray, indices, conditions, shapes,
+                 by_shape: bool):
+    """Smallest matched-pair MAC per mode and condition, and the mismatched pairs."""
+    mode_mac, bad = {}, []
+    for c in conditions:
+        diag = []
+        for p, q, erls in zip(indices, poses, shapes[c]):
+            k = erls.translations.shape[1]
+            phi = lumped.modes(q, c)[1][:, :k]
+            if by_shape:
+                phi = phi[:, shape_order(lumped, q, phi, erls)]
+            mac = mac_matrix(erls.translations,
+                             node_translations(lumped, q, phi, erls.positions))
+            diag.append(np.diag(mac))
+            f = erls.freq_hz
+            # within a repeated frequency any basis is a valid set of shapes: no mismatch
+            bad += [(c, int(p), *m) for m in mismatches(mac)
+                    if abs(f[m[1]] - f[m[0]]) > REPEATED * f[m[0]]]
+        mode_mac[c] = np.min(diag, axis=0)
+    return mode_mac, tuple(bad)
+
+
+def warn_if_off(fit: LumpedFit, limit: float, counts: Mapping[str, int]) -> None:
+    """Warn (:class:`LumpedFitWarning`) when the fit's errors exceed ``limit``."""
+    comp = fit.compliance_error
+    if fit.worst_error <= limit and comp <= limit:
+        return
+    c, mode = max(((c, int(np.argmax(v))) for c, v in fit.mode_errors.items()),
+                  key=lambda cm: fit.mode_errors[cm[0]][cm[1]])
+    label = "its own" if c == "own" else "locked"
+    seg = ", ".join(f"{link}: {n}" for link, n in counts.items())
+    worse = (" (worse than the equal-segment chain's "
+             f"{100 * fit.naive_worst_error:.3g} %)"
+             if fit.worst_error > fit.naive_worst_error else "")
+    warnings.warn(LumpedFitWarning(
+        f"lumped fit with segments {{{seg}}} misses the ERLS model: worst frequency error "
+        f"{100 * fit.worst_error:.3g} % (mode {mode + 1}, {label} joints, over "
+        f"{len(fit.poses)} pose(s)){worse}, static compliance error {100 * comp:.3g} %; "
+        f"allowed {100 * limit:.3g} %: too few segments for {fit.n_modes} modes; use more "
+        "segments (--segments, or --tol to pick them), fewer modes (--modes)"
+        + ("" if fit.lumped.layout.axial or fit.lumped.layout.planar
+           else ", or axial springs (--axial)")), stacklevel=3)

@@ -119,6 +119,10 @@ class ArmLayout:
         inertias: Rigid bodies ``{link: pin.Inertia}`` at the link frame (rigid links' URDF
             inertias, and any rigid body a flexible link carries besides its beam).
         point_masses: ``(name, link, xyz (3,) [m], mass [kg])`` tuples.
+        bodies: ``(name, link, pin.Inertia at the link frame)`` of the rigid bodies with full
+            inertia a flexible link carries (``<pinflex:body>``, kept URDF inertia): each rides
+            on the segment holding its centre of mass, as the ERLS model moves it with the
+            cross-section there.
         arm_joints: Moving joints in the arm's joint order (``FlexibleModel.joint_names``).
         coord_map: ``C`` (nv, nv): relative joint values ``= C q_user``.
         axial: Whether each station also has an axial spring (a slide along the beam).
@@ -134,6 +138,7 @@ class ArmLayout:
     arm_joints: tuple[ArmJoint, ...]
     coord_map: np.ndarray
     axial: bool = False
+    bodies: tuple[tuple[str, str, pin.Inertia], ...] = ()
 
     @property
     def axes(self) -> tuple[str, ...]:
@@ -204,6 +209,8 @@ def layout_of(arm, *, axial: bool = False) -> ArmLayout:
     values = arm.point_mass_values
     point_masses = tuple((p.name, p.link, np.array(p.xyz, dtype=float), float(values[p.name]))
                          for p in plan.point_masses)
+    bodies = tuple((b.name, b.link, pin.SE3(np.eye(3), np.array(b.xyz, dtype=float)).act(
+        inertia_from_spatial(np.asarray(b.inertia)))) for b in getattr(plan, "bodies", ()))
     conds = {c.name: c for c in arm.joint_conditions}
     arm_joints = []
     for name in arm.joint_names:
@@ -220,4 +227,4 @@ def layout_of(arm, *, axial: bool = False) -> ArmLayout:
         joints=MappingProxyType(joints), beams=MappingProxyType(beams),
         inertias=MappingProxyType(inertias), point_masses=point_masses,
         arm_joints=tuple(arm_joints), coord_map=np.array(arm.coord_map, dtype=float),
-        axial=bool(axial))
+        axial=bool(axial), bodies=bodies)

@@ -410,6 +410,9 @@ def build(layout: ArmLayout, segments: Mapping[str, LinkSegments]) -> LumpedArm:
         if mass > 0.0:
             jid, frame = ride(link, xyz)
             model.appendBodyToJoint(jid, pin.Inertia(mass, xyz, np.zeros((3, 3))), frame)
+    for _name, link, inertia in layout.bodies:
+        jid, frame = ride(link, inertia.lever)
+        model.appendBodyToJoint(jid, inertia, frame)
     for link, (jid, frame) in frames.items():
         model.addFrame(pin.Frame(link, jid, frame, pin.FrameType.BODY))
     names = list(model.names[1:])
