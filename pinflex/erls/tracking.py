@@ -257,7 +257,7 @@ def track(
                      mac_step, moved)
     cols = [m - 1 for m in modes]
     return ModeTracking(
-        modes=modes,
+        modes=tuple(modes),
         eigvals=tracked[:, cols],
         order=perm[:, cols] + 1,
         sorted_eigvals=lam,
