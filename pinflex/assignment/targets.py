@@ -47,10 +47,13 @@ def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
 
 
 def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> None:
-    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits.
+    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits or is in degrees.
 
     The samples are converted to Pinocchio's joint values, which the limits refer to, and
-    checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off).
+    checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off). A revolute
+    or continuous joint whose values go beyond one turn (|q| > 2π) is named as looking like
+    degrees: joint values are in radians, and a continuous joint without limits would
+    otherwise take 90 for a quarter turn silently.
 
     Args:
         model: The flexible model whose URDF holds the limits [rad or m].
@@ -67,5 +70,17 @@ def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> Non
             f"{len(model.joint_names)}): one column per joint {list(model.joint_names)}")
     joints = [model.description.joints[name] for name in model.joint_names]
     in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
+    turning = [k for k, j in enumerate(joints) if j.type in ("revolute", "continuous")]
+    big = [k for k in turning if np.max(np.abs(in_pin.q[:, k])) > 2 * np.pi + 1e-9]
+    if big:
+        import warnings
+
+        from pinflex.exceptions import TrajectoryWarning
+
+        worst = ", ".join(f"'{joints[k].name}' reaches {np.max(np.abs(in_pin.q[:, k])):.4g}"
+                          for k in big[:4])
+        warnings.warn(
+            f"joint values beyond one turn ({worst}) look like degrees: joint values are in "
+            "radians (convert with numpy.radians)", TrajectoryWarning, stacklevel=3)
     in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
 

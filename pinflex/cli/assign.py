@@ -187,6 +187,7 @@ def cmd_assign(args: argparse.Namespace) -> int:
         files.append(str(data.to_parquet(args.parquet)))
     html = write_preview(model, traj, result, args.html) if args.html else None
     out = summary(result, total)
+    out["design_units"] = {d.name: d.unit for d in model.design}
     out["charts"] = charts
     out["files"] = files
     out["html"] = html
@@ -195,7 +196,9 @@ def cmd_assign(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(out))
         return code
-    print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
+    units = {d.name: d.unit for d in model.design}
+    print("design: " + ", ".join(f"{k} = {v:.6g} {units[k]}".rstrip()
+                                 for k, v in result.design.items()))
     print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
     choice = result.taylor.order_choice
     if choice is not None:

@@ -53,7 +53,8 @@ def load(path: str | Path, values: dict[str, float] | None = None, *,
     text = read_text(path, "URDF file")
     doc = parse_xml(text, str(path))
     if doc.root.tag == _NS + "overlay":
-        checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False)
+        checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False,
+                                              values=values)
         raise_problems(str(path), problems, " in the overlay")
         base = resolve_base(doc.root.get("base", ""), path.parent)
         flexible = frozenset(el.get("link", "") for el in doc.root.findall(_NS + "flexible"))
@@ -98,7 +99,8 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
         plausibility: 'refuse' (default) or 'warn' about non-physical values.
     """
     doc = parse_xml(urdf_xml, source)
-    checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False)
+    checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False,
+                                          values=values)
     if doc.root.tag == "robot":
         flexible = {el.get("link", "") for el in doc.root.findall(_NS + "flexible")}
         problems += check_urdf(doc, flexible, raise_now=False)
@@ -471,7 +473,8 @@ def _parse_joint_annotation(el: ET.Element, joints: dict[str, Joint],
     if locked_text not in ("1", "true", "yes", "0", "false", "no"):
         raise InvalidDescription(f"{what}: locked='{el.get('locked')}' must be true or false")
     locked = locked_text in ("1", "true", "yes")
-    stiffness = R.number(el, "stiffness", what, required=False, design_ok=True)
+    unit = "N/m" if joints[name].type == "prismatic" else "N m/rad"
+    stiffness = R.number(el, "stiffness", what, required=False, design_ok=True, unit=unit)
     stiffness_ref = R.ref(el, "stiffness")
     if locked and stiffness is not None:
         raise InvalidDescription(

@@ -252,7 +252,7 @@ class FlexibleModel:
             for p in description.point_masses
             if p.design
         ) + tuple(
-            DesignVariable(p.name, p.lower, p.upper, p.value, "parameter")
+            DesignVariable(p.name, p.lower, p.upper, p.value, "parameter", p.unit)
             for p in description.parameters.values()
             if p.design
         )

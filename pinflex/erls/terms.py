@@ -30,6 +30,9 @@ class DesignVariable:
         kind: 'mass' (a point mass with ``design="true"``) or 'parameter' (a
             ``<pinflex:parameter design="true">``: a section dimension or property, material
             constant, point-mass value or joint stiffness).
+        unit: Its unit, from its use: ``kg`` for a mass, ``m`` for a section dimension,
+            ``Pa`` for E or G, ``kg/m^3`` for a density, ``N m/rad`` or ``N/m`` for a joint
+            stiffness (:attr:`pinflex.description.params.Parameter.unit`).
     """
 
     name: str
@@ -37,6 +40,7 @@ class DesignVariable:
     upper: float
     nominal: float
     kind: str = "mass"
+    unit: str = "kg"
 
 
 @dataclass(frozen=True)
