@@ -185,9 +185,9 @@ def _section_rule(v: dict, report: Report, ctx: _Context) -> None:
         report("wall", "give inner_diameter or wall, not both")
         return
     if shape == "hollow_circle" and _num(v.get("wall")) and not (
-        0.0 < v["wall"] < v["outer_diameter"] / 2.0
+        0.0 < v["wall"] <= v["outer_diameter"] / 2.0  # half: a solid rod (inner diameter 0)
     ):
-        report("wall", f"wall = {v['wall']:g} m must be above 0 and below half the "
+        report("wall", f"wall = {v['wall']:g} m must be above 0 and at most half the "
                f"outer_diameter ({v['outer_diameter'] / 2.0:g} m)")
         return
     if shape == "hollow_circle" and _num(v.get("inner_diameter")):
