@@ -188,6 +188,7 @@ def cmd_assign(args: argparse.Namespace) -> int:
     html = write_preview(model, traj, result, args.html) if args.html else None
     out = summary(result, total)
     out["design_units"] = {d.name: d.unit for d in model.design}
+    out["link_inertia"] = list(model.description.inertia_notes)
     out["charts"] = charts
     out["files"] = files
     out["html"] = html
@@ -200,6 +201,10 @@ def cmd_assign(args: argparse.Namespace) -> int:
     print("design: " + ", ".join(f"{k} = {v:.6g} {units[k]}".rstrip()
                                  for k, v in result.design.items()))
     print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
+    from pinflex.cli.common import inertia_text
+
+    if inertia_text(model):
+        print(inertia_text(model))
     choice = result.taylor.order_choice
     if choice is not None:
         print(f"Taylor order {choice['order']} for --tol {choice['tol']:g} (two-term estimate "

@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, joints_text, parse_values
+from pinflex.cli.common import add_robot_arguments, inertia_text, joints_text, parse_values
 
 
 def add_parser(sub) -> None:
@@ -75,6 +75,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
             "joint_condition_text": condition_text(model),
             "joints": model.joint_labels(),
             "held_frequencies_hz": {k: v.tolist() for k, v in held.items()},
+            "link_inertia": list(model.description.inertia_notes),
             "frequencies_hz": freqs.tolist(),
         }
         if fidelity is not None:
@@ -91,6 +92,8 @@ def cmd_modes(args: argparse.Namespace) -> int:
           f"{model.coordinates} joint coordinates")
     print(joints_text(model))
     print("joint condition: " + condition_text(model))
+    if inertia_text(model):
+        print(inertia_text(model))
     line = held_line(held)
     if line:
         print(line)

@@ -87,6 +87,7 @@ class SolvePlan:
     pm_attach: tuple  # per model.plan.point_masses entry
     nx: int
     nv: int
+    body_attach: tuple = ()  # per model.plan.bodies entry
 
 
 def supported(model) -> bool:
@@ -156,7 +157,8 @@ def _build_solve_plan(model) -> SolvePlan:
         )
     joint_attach = tuple(_attach(model, cores, j.parent, j.xyz) for j in model.plan.joints)
     pm_attach = tuple(_attach(model, cores, p.link, p.xyz) for p in model.plan.point_masses)
-    return SolvePlan(cores, joint_attach, pm_attach, nx, model.nv)
+    body_attach = tuple(_attach(model, cores, b.link, b.xyz) for b in model.plan.bodies)
+    return SolvePlan(cores, joint_attach, pm_attach, nx, model.nv, body_attach)
 
 
 def _cumulative_transpose(X, P0, Ofs, le, n, r):
@@ -378,6 +380,20 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
             target += mm(np.swapaxes(g, -1, -2), W @ g)
         else:
             add_rigid(slot, link, translate_twist(xyz)[:3], gJ, W)
+    for body, att in zip(model.plan.bodies, plan.body_attach):  # on beams: six twist rows
+        gJ = translate_twist(body.xyz) @ terms.jac[body.link]
+        e = None if twists[body.link] is None else explicit_twist(twists[body.link], sources,
+                                                                  alg)
+        e_full = None
+        if e is not None:
+            e_full = np.zeros((lead, 6, nx))
+            e_full[:, :, : e.shape[-1]] = e
+        tau = attach_twist(att, e_full, alg, nx)
+        g = np.zeros((lead, 6, nd))
+        if tau is not None:
+            g[:, :, :nx] = tau
+        g[:, :, nx:] = gJ
+        M += mm(np.swapaxes(g, -1, -2), body.inertia @ g)
     for (k, slot), (C, D) in comp.items():
         target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
         tau, w = sources[k]
