@@ -145,3 +145,15 @@ def test_bad_drive_values_are_named():
         pinflex.JointSpec(locked=True, damping=1.0)
     with pytest.raises(ConfigurationError):
         pinflex.servo(1e3, gains="rotor")
+
+
+def test_time_simulation_refuses_joint_drives_it_does_not_model():
+    """Joint damping and armature are in the modal model; the time simulation names them
+    instead of dropping them (a silent difference between simulate and modes)."""
+    from pinflex.dynamics import ErlsDynamics
+    from pinflex.exceptions import ConfigurationError
+
+    for a, c in (("0.01", "0"), ("0", "0.5")):
+        with pytest.raises(ConfigurationError, match="damping and armature"):
+            ErlsDynamics(_model(one_link(a=a, c=c)))
+    ErlsDynamics(_model(one_link(a="0.01", locked=True)))  # a locked rotor does not turn

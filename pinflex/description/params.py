@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from pinflex.exceptions import (
@@ -125,8 +126,12 @@ def parse_parameters(root_el: ET.Element, ns: str, overrides: dict[str, float] |
 class Resolver:
     """Reads numeric attributes, resolving ``{name}`` references and recording their use."""
 
-    def __init__(self, params: dict[str, Parameter]):
+    def __init__(self, params: dict[str, Parameter],
+                 unit_of: Callable[[ET.Element, str], str] | None = None):
+        """``unit_of(element, attribute)`` gives an attribute's unit (the schema's), which a
+        parameter referenced there takes."""
         self.params = params
+        self.unit_of = unit_of or (lambda el, key: "")
         self.uses: dict[str, list[str]] = {name: [] for name in params}
         self.units: dict[str, dict[str, str]] = {name: {} for name in params}
 
@@ -151,7 +156,7 @@ class Resolver:
                unit: str | None = None) -> float | None:
         """The value of attribute ``key`` (a number or a reference); None if absent.
 
-        ``unit`` is the attribute's unit (default: the schema's, :func:`attribute_unit`); a
+        ``unit`` is the attribute's unit (default: ``unit_of(el, key)``); a
         referenced parameter takes it.
         """
         text = el.get(key)
@@ -163,7 +168,7 @@ class Resolver:
         name = reference(text)
         if name is not None:
             value = self.lookup(name, where, design_ok=design_ok,
-                                unit=attribute_unit(el, key) if unit is None else unit).value
+                                unit=self.unit_of(el, key) if unit is None else unit).value
         elif "{" in text or "}" in text:
             raise InvalidDescription(
                 f"{where}='{text}': a reference is written '{{name}}' with a parameter name"
@@ -199,7 +204,7 @@ class Resolver:
                 )
             out.append(tok if name is None else
                        repr(self.lookup(name, f"{what} {key}", design_ok=False,
-                                        unit=attribute_unit(el, key)).value))
+                                        unit=self.unit_of(el, key)).value))
         return " ".join(out)
 
     def finish(self) -> dict[str, Parameter]:
@@ -221,12 +226,3 @@ class Resolver:
                                tuple(self.uses[n]), next(iter(units), ""))
         return out
 
-
-def attribute_unit(el: ET.Element, key: str) -> str:
-    """The unit of attribute ``key`` of a pinflex element, from the schema (``""`` if none)."""
-    from pinflex.description.schema import SCHEMA
-
-    tag = el.tag.rsplit("}", 1)[-1]
-    element = SCHEMA.get(tag)
-    attr = None if element is None else element.attrs.get(key)
-    return "" if attr is None else attr.unit

@@ -12,7 +12,7 @@ from pinflex import beam
 from pinflex.description.checks import check_annotations, check_physical, check_urdf
 from pinflex.description.overlay import apply_overlay, resolve_base
 from pinflex.description.params import Resolver, parse_parameters
-from pinflex.description.schema import Checked
+from pinflex.description.schema import Checked, attribute_unit
 from pinflex.description.source import parse_xml, read_text
 from pinflex.description.types import (
     _NS,
@@ -115,7 +115,7 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
     if root_el.tag != "robot":
         raise InvalidDescription(f"the URDF's root element is <{root_el.tag}>, expected <robot>")
     params = parse_parameters(root_el, _NS, values)
-    R = Resolver(params)
+    R = Resolver(params, attribute_unit)
     links = tuple(_name(el, "<link>") for el in root_el.findall("link"))
     inertias = {}
     for el in root_el.findall("link"):
@@ -332,7 +332,7 @@ def _parse_joint(el: ET.Element, links: tuple[str, ...]) -> Joint:
 
 def _float_attr(el: ET.Element, key: str, what: str, *, required: bool = True,
                 R: Resolver | None = None, design_ok: bool = False) -> float | None:
-    return (R or Resolver({})).number(el, key, what, required=required, design_ok=design_ok)
+    return (R or Resolver({}, attribute_unit)).number(el, key, what, required=required, design_ok=design_ok)
 
 
 def _entry(el: ET.Element, key: str, what: str, R: Resolver, *, required: bool = True):

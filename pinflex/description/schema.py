@@ -444,3 +444,11 @@ class _Context:
 
 def _num(x) -> TypeGuard[float]:
     return isinstance(x, float) and math.isfinite(x)
+
+
+def attribute_unit(el, key: str) -> str:
+    """The unit of attribute ``key`` of a pinflex element ``el`` (``""`` if none)."""
+    tag = el.tag.rsplit("}", 1)[-1]
+    element = SCHEMA.get(tag)
+    attr = None if element is None else element.attrs.get(key)
+    return "" if attr is None else attr.unit

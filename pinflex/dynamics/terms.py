@@ -120,6 +120,12 @@ class ErlsDynamics:
             j.attach.lin is not None and j.parent != model.plan.root and j.user_col >= 0
             for j in model.plan.joints)
         conds = getattr(model, "joint_conditions", ())
+        drives = [c.name for c in conds if c.kind != "locked" and (c.damping or c.armature)]
+        if drives:
+            raise ConfigurationError(
+                f"joint damping and armature are not in the time simulation yet (joints "
+                f"{', '.join(drives)}): simulate with joints that have neither, or use the "
+                "modal model (pinflex.erls.joints.damping_matrices, FlexibleModel.matrices)")
         #: locked joints ``(name, user column)``: their physical angle is held constant (the
         #: prescribed drive checks that the trajectory holds them; the torque drive refuses)
         self.locked = tuple((c.name, model.joint_index(c.name)) for c in conds
