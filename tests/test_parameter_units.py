@@ -157,3 +157,8 @@ def test_a_trajectory_in_degrees_is_named():
     deg[:, 1:] = q[:, 1:]  # only the continuous joint 1 in degrees: 30..47, no limits there
     with pytest.warns(TrajectoryWarning, match="j2s6s200_joint_1.*look like degrees"):
         check_trajectory_limits(model, Trajectory(t, deg, model.joint_names))
+    # the frequencies along a motion (pinflex modes --trajectory) name it too
+    from pinflex.erls.along import modes_along
+
+    with pytest.warns(TrajectoryWarning, match="j2s6s200_joint_1.*look like degrees"):
+        modes_along(model, Trajectory(t[:2], deg[:2], model.joint_names), modes=1, extra=0)

@@ -68,19 +68,10 @@ def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> Non
         raise InvalidTrajectory(
             f"the trajectory has samples of shape {q.shape}; the model needs (n_samples, "
             f"{len(model.joint_names)}): one column per joint {list(model.joint_names)}")
+    from pinflex.trajectory.cartesian import warn_if_degrees
+
     joints = [model.description.joints[name] for name in model.joint_names]
     in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
-    turning = [k for k, j in enumerate(joints) if j.type in ("revolute", "continuous")]
-    big = [k for k in turning if np.max(np.abs(in_pin.q[:, k])) > 2 * np.pi + 1e-9]
-    if big:
-        import warnings
-
-        from pinflex.exceptions import TrajectoryWarning
-
-        worst = ", ".join(f"'{joints[k].name}' reaches {np.max(np.abs(in_pin.q[:, k])):.4g}"
-                          for k in big[:4])
-        warnings.warn(
-            f"joint values beyond one turn ({worst}) look like degrees: joint values are in "
-            "radians (convert with numpy.radians)", TrajectoryWarning, stacklevel=3)
+    warn_if_degrees(model, in_pin.q)
     in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
 
