@@ -202,3 +202,37 @@ def test_an_unphysical_body_inertia_is_refused():
         'ixx="0.1" iyy="0.1" izz="0.5"/></robot>')
     with pytest.raises(ImplausibleValue, match="not a rigid body's"):
         parse(text)
+
+
+def test_lumped_chain_carries_the_kept_urdf_inertia(tmp_path):
+    """The spring-chain arm of beam links that keep their URDF motors: what the kept bodies
+    add to the chain's rigid-body mass matrix at the joints (hinges at rest) is what they add
+    to Pinocchio's CRBA of the model the modal analysis sees (beam-only vs keep-excess)."""
+    from pinflex.lumped import equal_lumped, layout_of
+
+    path = ROOT / "urdf" / "ur5_flexible.xml"
+    bare = tmp_path / "ur5_beam_only.xml"
+    bare.write_text(path.read_text().replace("<pinflex:flexible ",
+                                             '<pinflex:flexible inertia="beam-only" '))
+    q = np.array([0.3, -1.0, 1.2, -0.5, 0.7, 0.2])
+
+    def joint_blocks(file):
+        arm = FlexibleModel(file)
+        chain = equal_lumped(layout_of(arm), 3).model
+        full = pin.neutral(chain)
+        cols = []
+        for k, name in enumerate(arm.joint_names):
+            j = chain.joints[chain.getJointId(name)]
+            full[j.idx_q] = q[k]
+            cols.append(j.idx_v)
+        Mc = pin.crba(chain, chain.createData(), full)
+        eff = arm.effective_model()
+        Me = pin.crba(eff, eff.createData(), arm.pin_configuration(q))
+        return np.triu(Mc)[np.ix_(cols, cols)], np.triu(Me), len(arm.description.bodies)
+
+    Mc, Me, n = joint_blocks(path)
+    Mc0, Me0, n0 = joint_blocks(bare)
+    assert n == 2 and n0 == 0
+    added = Me - Me0
+    assert np.abs(added).max() > 0.5  # 8.3 kg of motors and flanges
+    np.testing.assert_allclose(Mc - Mc0, added, rtol=0, atol=1e-9 * np.abs(Me).max())
