@@ -157,3 +157,19 @@ def test_time_simulation_refuses_joint_drives_it_does_not_model():
         with pytest.raises(ConfigurationError, match="damping and armature"):
             ErlsDynamics(_model(one_link(a=a, c=c)))
     ErlsDynamics(_model(one_link(a="0.01", locked=True)))  # a locked rotor does not turn
+
+
+def test_linear_model_export_carries_the_joint_damper():
+    """pinflex export's state space: the lowest pole of A has the closed form's ζ (was
+    undamped: the export's damping held only modal/Rayleigh terms)."""
+    from pinflex.native.export import linear_model
+
+    k, c, a = 100.0, 0.2, 0.01
+    model = _model(one_link(k=str(k), c=str(c), a=str(a)))
+    data = linear_model(model, np.array([0.3]))
+    np.testing.assert_allclose(data["damping"], damping_matrices(model, np.array([0.3])),
+                               rtol=0, atol=0)
+    s = np.linalg.eigvals(data["A"])
+    low = s[np.argmin(np.abs(s))]
+    J = RHO_A * L**3 / 3
+    assert -low.real / abs(low) == pytest.approx(c / (2 * np.sqrt(k * (J + a))), rel=5e-5)
