@@ -211,3 +211,30 @@ def test_order_by_tolerance_is_bounded_before_any_expansion(monkeypatch, kinova_
         with pytest.raises(ConfigurationError, match="orders above 1 were not tried"):
             assign_frequencies(model, traj, [Target(1, 44.0)], taylor_tol=1e-9,
                                max_refinements=0)
+
+
+def test_examples_page_quotes_what_pinflex_modes_prints(monkeypatch, capsys):
+    """docs/examples.md's table of the three arms: free, locked and servo mode 1 as printed by
+    the commands the page names."""
+    import re
+    import shlex
+
+    from pinflex.cli import main
+
+    text = (ROOT / "docs" / "examples.md").read_text()
+    section = text[text.index("## `real_arms/`"):]
+    commands = [ln for ln in re.search(r"```bash\n(.*?)```", section, re.S).group(1).splitlines()
+                if ln.startswith("pinflex modes")]
+    rows = re.findall(r"^\| (UR3|Kinova Jaco2|Unitree Z1) \| ([0-9.]+) \| ([0-9.]+) \| "
+                      r"([0-9.]+) \|$", section, re.M)
+    assert len(commands) == len(rows) == 3
+    monkeypatch.chdir(ROOT)
+    for line, (_, free, locked, servo) in zip(commands, rows):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            assert main(shlex.split(line)[1:]) == 0
+        out = capsys.readouterr().out
+        assert f"{float(re.search(r'^ +1 +([0-9.]+)', out, re.M).group(1)):.2f}" == free
+        held = re.search(r"rings at its locked or servo modes: ([0-9.]+),.*?Hz with every joint "
+                         r"locked; ([0-9.]+),", out)
+        assert held.group(1) == locked and held.group(2) == servo
