@@ -113,6 +113,16 @@ def test_armature_equals_pinocchio_crba_with_model_armature(tmp_path):
         nx = model.nx
         np.testing.assert_allclose(M[nx:, nx:] - M0[nx:, nx:], ref - ref0, atol=1e-12)
         np.testing.assert_allclose(M[nx:, nx:] - M0[nx:, nx:], np.diag(armature), atol=1e-12)
+    # the conditioned solve (relative joint values) sees the armature as the nodal pencil does,
+    # free and on the servo springs
+    for joints in ("free", "annotated"):
+        arm = FlexibleModel(tmp, joints=joints)
+        M, K = arm.matrices(q)
+        lam = arm.eigvals_from(M, K)
+        np.testing.assert_allclose(arm.frequencies(q, n_modes=4),
+                                   np.sqrt(lam[:4]) / (2 * np.pi), rtol=1e-8)  # nodal rounding
+        assert arm.frequencies(q, n_modes=1)[0] < FlexibleModel(
+            path, joints=joints).frequencies(q, n_modes=1)[0] * (1 - 1e-3)
 
 
 def test_servo_reduction_and_python_route_equal_the_xml():
@@ -145,18 +155,6 @@ def test_bad_drive_values_are_named():
         pinflex.JointSpec(locked=True, damping=1.0)
     with pytest.raises(ConfigurationError):
         pinflex.servo(1e3, gains="rotor")
-
-
-def test_time_simulation_refuses_joint_drives_it_does_not_model():
-    """Joint damping and armature are in the modal model; the time simulation names them
-    instead of dropping them (a silent difference between simulate and modes)."""
-    from pinflex.dynamics import ErlsDynamics
-    from pinflex.exceptions import ConfigurationError
-
-    for a, c in (("0.01", "0"), ("0", "0.5")):
-        with pytest.raises(ConfigurationError, match="damping and armature"):
-            ErlsDynamics(_model(one_link(a=a, c=c)))
-    ErlsDynamics(_model(one_link(a="0.01", locked=True)))  # a locked rotor does not turn
 
 
 def test_linear_model_export_carries_the_joint_damper():
