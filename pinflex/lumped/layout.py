@@ -206,12 +206,6 @@ def layout_of(arm, *, axial: bool = False) -> ArmLayout:
                   float(spec.rhoIp * sec.Iz / (sec.Iy + sec.Iz))),
             radius_m=float(np.sqrt(sec.A / np.pi)), elements=int(spec.elements))
     inertias = {link: inertia_from_spatial(np.asarray(m)) for link, m in plan.inertias.items()}
-    on_beams = {b.name for b in plan.bodies}
-    for body in desc.bodies:  # rigid bodies a beam carries (<pinflex:body>, the kept URDF part)
-        if body.name in on_beams:
-            add = pin.Inertia(float(body.mass), np.asarray(body.com, float),
-                              np.asarray(body.inertia, float))
-            inertias[body.link] = inertias[body.link] + add if body.link in inertias else add
     values = arm.point_mass_values
     point_masses = tuple((p.name, p.link, np.array(p.xyz, dtype=float), float(values[p.name]))
                          for p in plan.point_masses)
