@@ -154,3 +154,13 @@ def locked_global_fe(q_abs, m1, m2):
         T[i, col] = 1.0
     T[13, keep.index(12)] = 1.0  # link-2 rotation at the elbow = link-1 rotation there
     return T.T @ K @ T, T.T @ M @ T, keep
+
+
+def tubes_alone(path):
+    """The description of an overlay without the rigid bodies its beam links keep of the
+    URDF inertia (motors, flanges): the tubes alone, as ``inertia="beam-only"``."""
+    import dataclasses
+
+    from pinflex.description import load
+
+    return dataclasses.replace(load(path), bodies=())
