@@ -358,3 +358,40 @@ def test_modes_at_speed_along_a_constant_spin_equal_the_rotating_frame_fe(kane):
     assert not res.unstable.any()
     for row in res.freq_hz:
         assert row == pytest.approx(ref, rel=1e-7)
+
+
+def test_gravity_preload_buckles_a_standing_column_at_greenhills_load(tmp_path):
+    """terms='full' at rest under gravity: the geometric stiffness of the self-weight.
+
+    A uniform column clamped at its foot, standing in gravity, buckles when its weight per
+    length reaches ``q L³ / EI = 7.83735`` (Greenhill's self-weight buckling constant). Here:
+    the smallest gravity at which the locked arm's stiffness with the speed terms loses
+    positiveness, within 1e-5 (20 elements; measured 7.837350); upside down the column hangs
+    and its modes rise (modes_at_speed: the gravity preload in the modal analysis).
+    """
+    from pinflex.dynamics.modes import modes_at_speed
+    from pinflex.dynamics.prescribed import locked_coefficients
+
+    L, EI, rhoA = 2.0, 50.0, 0.8
+    urdf = KANE.replace('elements="10" normal="0 0 1" tip="10 0 0"',
+                        f'elements="20" tip="0 0 {L}"').replace(
+        '<axis xyz="0 0 1"/>', '<axis xyz="1 0 0"/>').replace(
+        'linear_density="1.2"', f'linear_density="{rhoA}"').replace(
+        'A="2e-4" Iy="2e-7" Iz="2e-7" J="4e-7"',
+        f'A="1e-4" Iy="{EI / 7e10}" Iz="{EI / 7e10}" J="{2 * EI / 7e10}"')
+    path = tmp_path / "column.urdf"
+    path.write_text(urdf)
+    model = FlexibleModel(path, joints="locked")
+
+    def stiffness(g):
+        dyn = ErlsDynamics(model, gravity=[0.0, 0.0, -g])
+        return locked_coefficients(dyn, [0.0], [0.0], [0.0], terms="full").K
+
+    K0, K1 = stiffness(0.0), stiffness(1.0)
+    lam = np.linalg.eigvals(np.linalg.solve(K0, K0 - K1))  # K(g) = K0 − g (K0 − K1)
+    g_cr = 1.0 / lam.real.max()
+    assert g_cr * rhoA * L**3 / EI == pytest.approx(7.83735, rel=1e-5)
+    standing = modes_at_speed(ErlsDynamics(model, gravity=[0, 0, -0.5 * g_cr]), [0.0])
+    hanging = modes_at_speed(ErlsDynamics(model, gravity=[0, 0, 0.5 * g_cr]), [0.0])
+    still = modes_at_speed(ErlsDynamics(model), [0.0])
+    assert standing.freq_hz[0] < still.freq_hz[0] < hanging.freq_hz[0]

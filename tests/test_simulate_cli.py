@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 import reference_fe as ref
 
+from pinflex.exceptions import ModelValidityWarning
+
 Q = (1.8, 5.3)  # absolute link angles of benchmark A (the file's user convention)
 
 
@@ -163,3 +165,23 @@ def test_locked_joints_are_refused_before_the_assignment(tmp_path, capsys, monke
     assert "joints ['q2'] are locked" in capsys.readouterr().err
     assert main(["simulate", "builtin:two_link.urdf"]) == 2
     assert "--trajectory" in capsys.readouterr().err
+
+
+def test_a_fast_motion_is_warned_about_and_strict_refuses_it(tmp_path, capsys):
+    """The validity indicator in `pinflex simulate`: a warning, JSON per design, --strict.
+
+    The arm swings 0.2 rad in 5 ms: --strict exits with status 2 before integrating.
+    """
+    from pinflex.cli import main
+
+    csv = _csv(tmp_path / "fast.csv", lambda h: (Q[0] + 0.2 * h, Q[1] + 0.2 * h), T=0.005)
+    args = ["simulate", "builtin:two_link.urdf", "--planar", "--trajectory", str(csv),
+            "--after", "0.002", "--sample-hz", "20000"]
+    with pytest.warns(ModelValidityWarning, match="fast for eq"):
+        assert main(args + ["--json"]) == 0
+    (d,) = json.loads(capsys.readouterr().out)["designs"]
+    v = d["validity"]
+    assert v["exceeded"] is True and v["indicator"] > v["threshold"] == 0.1
+    assert v["indicator"] == max(v["max_speed_ratio"], v["max_accel_ratio"])
+    assert main(args + ["--strict"]) == 2
+    assert "fast for eq. (1)" in capsys.readouterr().err
