@@ -136,8 +136,7 @@ def cantilevers(quick):
     cases = [(L, E, r, n) for L in LENGTHS for E in MODULI for r in RATIOS for n in MESHES]
     if quick:
         cases = cases[::4]
-    accuracy = tuple(c for c in (getattr(pex, "ConditioningWarning", None),
-                                 pex.SoftSpringWarning) if c is not None)
+    accuracy = (pex.SoftSpringWarning,)  # the named warning that an answer is not exact
     for L, E, r, n in cases:
         text, ref = cantilever(L, E, r, n)
         with warnings.catch_warnings(record=True) as caught:

@@ -47,11 +47,8 @@ import pinflex.exceptions as pex
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel
 
-# named warnings that say a number has fewer digits than asked (or a spring treated as free)
-_ACCURACY_WARNINGS = tuple(
-    c for c in (getattr(pex, "ConditioningWarning", None), getattr(pex, "SoftSpringWarning", None))
-    if c is not None
-)
+# the named warning that says an answer is not the asked model's (a spring treated as free)
+_ACCURACY_WARNINGS = (pex.SoftSpringWarning,)
 
 
 def _both(model, q, y=None, k=3):
@@ -166,8 +163,7 @@ def _extreme(L, E, ratio, n):
             return "refused"
     numpy_warnings = [w for w in caught if issubclass(w.category, RuntimeWarning)]
     assert not numpy_warnings, [str(w.message) for w in numpy_warnings]
-    named = [w for w in caught if _ACCURACY_WARNINGS and issubclass(w.category,
-                                                                     _ACCURACY_WARNINGS)]
+    named = [w for w in caught if issubclass(w.category, _ACCURACY_WARNINGS)]
     assert np.all(np.isfinite(f)) and np.all(np.isfinite(g)), (f, g)
     if named:
         return "warned"
@@ -203,16 +199,19 @@ def test_extreme_cantilevers_right_or_refused_by_name(L, ratio):
 
 @pytest.mark.slow
 def test_all_480_extreme_cantilevers_right_or_refused_by_name():
-    """The full set: 6 lengths × 4 moduli × 4 mass ratios × 5 meshes."""
-    outcome: dict[str, int] = {}
+    """The full set: 6 lengths × 4 moduli × 4 mass ratios × 5 meshes.
+
+    Every answer within 1e-6 (no accuracy warning needed); the only refusals are the 1 mm
+    bars, whose 5 mm section is wider than the link (ImplausibleValue).
+    """
+    outcome: dict[tuple[str, bool], int] = {}
     for L in LENGTHS:
         for E in MODULI:
             for ratio in RATIOS:
                 for n in MESHES:
-                    r = _extreme(L, E, ratio, n)
-                    outcome[r] = outcome.get(r, 0) + 1
-    assert sum(outcome.values()) == 480
-    assert outcome.get("ok", 0) >= 400, outcome
+                    key = (_extreme(L, E, ratio, n), L == 1e-3)
+                    outcome[key] = outcome.get(key, 0) + 1
+    assert outcome == {("ok", False): 400, ("refused", True): 80}, outcome
 
 
 # ---------------------------------------------------------------------------------------
