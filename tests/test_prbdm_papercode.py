@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 from scipy.linalg import eigh
-from scipy.optimize import differential_evolution, minimize_scalar
+from scipy.optimize import differential_evolution, minimize, minimize_scalar
 
 from pinflex.cases.paper001 import CODE_POSE_COUNTS
 from pinflex.cli import main
@@ -20,7 +20,8 @@ from pinflex.prbdm.chain import build_chain, solve_tip_statics
 from pinflex.prbdm.paper import PAPER_CODE, PAPER_TEXT, code_tip_force
 from pinflex.prbdm.paperfit import posed_problem
 from pinflex.prbdm.perpose import deflection_errors, eigen_terms, link_arrays, reference_springs
-from pinflex.prbdm.posedfit import best_factors, fit_posed
+import pinflex.prbdm.posedfit as posedfit
+from pinflex.prbdm.posedfit import best_factors, fit_posed, project_fractions
 from pinflex.prbdm.problem import compute_truth
 from pinflex.prbdm.truth import elastica_tip
 
@@ -208,6 +209,45 @@ def test_global_search_reaches_an_independent_differential_evolution(seed):
     assert ours == pytest.approx(fit.value, rel=1e-7)
     assert ours <= de.fun * (1.0 + 1e-6)
     assert fit.within(1e-6) >= 1 and fit.start_values[0] == pytest.approx(fit.value)
+
+
+def test_projection_onto_the_feasible_fractions():
+    """project_fractions is the nearest feasible point (checked by SLSQP), identity inside."""
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-0.5, 1.2, size=(20, 3))
+    ours = project_fractions(points)
+    for p, q in zip(points, ours):
+        ref = minimize(lambda z, p=p: np.sum((z - p) ** 2), np.full(3, 0.25),
+                       jac=lambda z, p=p: 2 * (z - p), method="SLSQP",
+                       bounds=[(0.02, None)] * 3,
+                       constraints=[{"type": "ineq", "fun": lambda z: 0.98 - z.sum()}],
+                       options={"ftol": 1e-15, "maxiter": 200}).x
+        assert q == pytest.approx(ref, abs=1e-7)
+    inside = np.array([[0.1, 0.2, 0.3], [0.02, 0.02, 0.94]])
+    assert project_fractions(inside) == pytest.approx(inside, abs=0.0)
+
+
+def test_polish_evaluates_only_feasible_designs(monkeypatch):
+    """The fractions' polish never asks for a design with a link shorter than 0.02 L.
+
+    SLSQP's line search leaves the simplex: on this beam (text reading, 3R) an earlier polish
+    evaluated a last fraction of -0.81, whose link has no mass matrix, and the eigensolver
+    failed. Outside the set the polish now evaluates the projection plus a penalty.
+    """
+    beam = random_beam(0)
+    truth = compute_truth(beam, 3, alphas=(0.5,))
+    problem = posed_problem(beam, 3, 3, truth, PAPER_TEXT)
+    smallest = [1.0]
+    original = posedfit.objective_values
+
+    def watched(problem, gammas, objective):
+        smallest[0] = min(smallest[0], float(np.min(gammas)))
+        return original(problem, gammas, objective)
+
+    monkeypatch.setattr(posedfit, "objective_values", watched)
+    fit = fit_posed(problem, "eigen", n_samples=512, n_starts=16, seed=0)
+    assert smallest[0] >= 0.02 * (1.0 - 1e-12)
+    assert np.all(fit.gamma >= 0.02 * (1.0 - 1e-12)) and fit.gamma.sum() == pytest.approx(1.0)
 
 
 def test_cli_paper_code(capsys):
