@@ -13,6 +13,7 @@ import pytest
 from scipy.linalg import eigh
 from scipy.optimize import differential_evolution, minimize, minimize_scalar
 
+import pinflex.prbdm.posedfit as posedfit
 from pinflex.cases.paper001 import CODE_POSE_COUNTS
 from pinflex.cli import main
 from pinflex.prbdm.beams import random_beam
@@ -20,7 +21,6 @@ from pinflex.prbdm.chain import build_chain, solve_tip_statics
 from pinflex.prbdm.paper import PAPER_CODE, PAPER_TEXT, code_tip_force
 from pinflex.prbdm.paperfit import posed_problem
 from pinflex.prbdm.perpose import deflection_errors, eigen_terms, link_arrays, reference_springs
-import pinflex.prbdm.posedfit as posedfit
 from pinflex.prbdm.posedfit import best_factors, fit_posed, project_fractions
 from pinflex.prbdm.problem import compute_truth
 from pinflex.prbdm.truth import elastica_tip
