@@ -19,7 +19,7 @@ from pinflex.cli import main
 from pinflex.prbdm.beams import random_beam
 from pinflex.prbdm.chain import build_chain, solve_tip_statics
 from pinflex.prbdm.paper import PAPER_CODE, PAPER_TEXT, code_tip_force
-from pinflex.prbdm.paperfit import posed_problem
+from pinflex.prbdm.paperfit import paper_losses_of, posed_problem
 from pinflex.prbdm.perpose import deflection_errors, eigen_terms, link_arrays, reference_springs
 from pinflex.prbdm.posedfit import best_factors, fit_posed, project_fractions
 from pinflex.prbdm.problem import compute_truth
@@ -248,6 +248,27 @@ def test_polish_evaluates_only_feasible_designs(monkeypatch):
     fit = fit_posed(problem, "eigen", n_samples=512, n_starts=16, seed=0)
     assert smallest[0] >= 0.02 * (1.0 - 1e-12)
     assert np.all(fit.gamma >= 0.02 * (1.0 - 1e-12)) and fit.gamma.sum() == pytest.approx(1.0)
+
+
+def test_unsolved_loads_in_a_reported_loss_are_named():
+    """A reported deflection loss that counts an unsolved load as 100 % says so.
+
+    On random beam 0 the text reading's eigen-only optimum, with its mean factor (eq. 25), is
+    so soft that the statics at alpha = 5 find no equilibrium: eq. 19 is then a penalty.
+    """
+    from dataclasses import replace
+
+    from pinflex.exceptions import UnsolvedLoadWarning
+
+    beam = random_beam(0)
+    truth = compute_truth(beam, 3)
+    problem = posed_problem(beam, 3, 3, truth, PAPER_TEXT)
+    posed = fit_posed(problem, "eigen", n_samples=64, n_starts=1, seed=0)
+    soft = replace(posed, gamma=np.array([0.59603533, 0.068577, 0.24642448, 0.08896319]),
+                   factors=np.array([402.168, 405.141, 410.784, 418.598, 428.031]))
+    with pytest.warns(UnsolvedLoadWarning, match="1 of 4 tip statics"):
+        losses = paper_losses_of(problem, soft)
+    assert 0.5 < losses["eq19_rms"] < 1.0
 
 
 def test_cli_paper_code(capsys):
