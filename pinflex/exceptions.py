@@ -171,6 +171,13 @@ class SoftSpringWarning(PinflexWarning):
     """A joint spring too soft to matter is treated as a free joint (see erls.joints)."""
 
 
+class UnsolvedLoadWarning(PinflexWarning):
+    """A PRBDM chain's tip statics found no equilibrium under a load (counted as 100 % error).
+
+    A reported deflection loss that includes such a load is a penalty, not a measured error.
+    """
+
+
 class InvalidBeam(InvalidBeamProperty):
     """A PRBDM beam planform is malformed (vertices, widths, thickness or material)."""
 

@@ -11,16 +11,17 @@ import json
 import numpy as np
 import pytest
 from scipy.linalg import eigh
-from scipy.optimize import differential_evolution, minimize_scalar
+from scipy.optimize import differential_evolution, minimize, minimize_scalar
 
+import pinflex.prbdm.posedfit as posedfit
 from pinflex.cases.paper001 import CODE_POSE_COUNTS
 from pinflex.cli import main
 from pinflex.prbdm.beams import random_beam
 from pinflex.prbdm.chain import build_chain, solve_tip_statics
 from pinflex.prbdm.paper import PAPER_CODE, PAPER_TEXT, code_tip_force
-from pinflex.prbdm.paperfit import posed_problem
+from pinflex.prbdm.paperfit import paper_losses_of, posed_problem
 from pinflex.prbdm.perpose import deflection_errors, eigen_terms, link_arrays, reference_springs
-from pinflex.prbdm.posedfit import best_factors, fit_posed
+from pinflex.prbdm.posedfit import best_factors, fit_posed, project_fractions
 from pinflex.prbdm.problem import compute_truth
 from pinflex.prbdm.truth import elastica_tip
 
@@ -208,6 +209,66 @@ def test_global_search_reaches_an_independent_differential_evolution(seed):
     assert ours == pytest.approx(fit.value, rel=1e-7)
     assert ours <= de.fun * (1.0 + 1e-6)
     assert fit.within(1e-6) >= 1 and fit.start_values[0] == pytest.approx(fit.value)
+
+
+def test_projection_onto_the_feasible_fractions():
+    """project_fractions is the nearest feasible point (checked by SLSQP), identity inside."""
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-0.5, 1.2, size=(20, 3))
+    ours = project_fractions(points)
+    for p, q in zip(points, ours):
+        ref = minimize(lambda z, p=p: np.sum((z - p) ** 2), np.full(3, 0.25),
+                       jac=lambda z, p=p: 2 * (z - p), method="SLSQP",
+                       bounds=[(0.02, None)] * 3,
+                       constraints=[{"type": "ineq", "fun": lambda z: 0.98 - z.sum()}],
+                       options={"ftol": 1e-15, "maxiter": 200}).x
+        assert q == pytest.approx(ref, abs=1e-7)
+    inside = np.array([[0.1, 0.2, 0.3], [0.02, 0.02, 0.94]])
+    assert project_fractions(inside) == pytest.approx(inside, abs=0.0)
+
+
+def test_polish_evaluates_only_feasible_designs(monkeypatch):
+    """The fractions' polish never asks for a design with a link shorter than 0.02 L.
+
+    SLSQP's line search leaves the simplex: on this beam (text reading, 3R) an earlier polish
+    evaluated a last fraction of -0.81, whose link has no mass matrix, and the eigensolver
+    failed. Outside the set the polish now evaluates the projection plus a penalty.
+    """
+    beam = random_beam(0)
+    truth = compute_truth(beam, 3, alphas=(0.5,))
+    problem = posed_problem(beam, 3, 3, truth, PAPER_TEXT)
+    smallest = [1.0]
+    original = posedfit.objective_values
+
+    def watched(problem, gammas, objective):
+        smallest[0] = min(smallest[0], float(np.min(gammas)))
+        return original(problem, gammas, objective)
+
+    monkeypatch.setattr(posedfit, "objective_values", watched)
+    fit = fit_posed(problem, "eigen", n_samples=512, n_starts=16, seed=0)
+    assert smallest[0] >= 0.02 * (1.0 - 1e-12)
+    assert np.all(fit.gamma >= 0.02 * (1.0 - 1e-12)) and fit.gamma.sum() == pytest.approx(1.0)
+
+
+def test_unsolved_loads_in_a_reported_loss_are_named():
+    """A reported deflection loss that counts an unsolved load as 100 % says so.
+
+    On random beam 0 the text reading's eigen-only optimum, with its mean factor (eq. 25), is
+    so soft that the statics at alpha = 5 find no equilibrium: eq. 19 is then a penalty.
+    """
+    from dataclasses import replace
+
+    from pinflex.exceptions import UnsolvedLoadWarning
+
+    beam = random_beam(0)
+    truth = compute_truth(beam, 3)
+    problem = posed_problem(beam, 3, 3, truth, PAPER_TEXT)
+    posed = fit_posed(problem, "eigen", n_samples=64, n_starts=1, seed=0)
+    soft = replace(posed, gamma=np.array([0.59603533, 0.068577, 0.24642448, 0.08896319]),
+                   factors=np.array([402.168, 405.141, 410.784, 418.598, 428.031]))
+    with pytest.warns(UnsolvedLoadWarning, match="1 of 4 tip statics"):
+        losses = paper_losses_of(problem, soft)
+    assert 0.5 < losses["eq19_rms"] < 1.0
 
 
 def test_cli_paper_code(capsys):

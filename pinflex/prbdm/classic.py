@@ -5,9 +5,13 @@ r"""Classic static pseudo-rigid-body models, evaluated like the fitted PRBDMs.
 * **Su 3R** (Su 2009, "A pseudorigid-body 3R model for determining large deflection of
   cantilever beams subject to tip loads", J. Mech. Robot. 1(2)): link fractions
   :math:`\gamma = [0.10, 0.35, 0.40, 0.15]` (root to tip) and springs
-  :math:`K_i = k_i EI/L`, :math:`k = [3.51, 2.99, 2.58]`.
+  :math:`K_i = k_i EI/L`. Three sets of k are published for these fractions:
+  :data:`SU_3R`, the **load-independent** set of the paper's Table 1,
+  :math:`k = [3.51, 2.99, 2.58]` (for loads not known in advance); :data:`SU_3R_MOMENT`,
+  fitted to a pure end moment, :math:`k = [3.51933, 2.78518, 2.79756]`; :data:`SU_3R_FORCE`,
+  fitted to a transverse end force, :math:`k = [3.71591, 2.87128, 2.26417]`.
 
-Both were derived for uniform beams under tip loads; on a non-uniform planform EI is taken as
+All were derived for uniform beams under tip loads; on a non-uniform planform EI is taken as
 :math:`EI_{eq}` (:func:`~pinflex.prbdm.beams.equivalent_bending_stiffness`, the uniform beam
 with the same linear tip compliance). They are static models: here their links carry the
 planform's mass, centre of mass and rotational inertia, exactly as the fitted PRBDM's do, so
@@ -42,6 +46,12 @@ class ClassicModel:
 
 HOWELL_1R = ClassicModel("Howell 1R", (0.15, 0.85), (0.85 * 2.65,),
                          "Howell, Midha and Norton, J. Mech. Des. 118(1), 1996")
-SU_3R = ClassicModel("Su 3R", (0.10, 0.35, 0.40, 0.15), (3.51, 2.99, 2.58),
-                     "Su, J. Mech. Robot. 1(2), 2009")
-CLASSIC_MODELS = (HOWELL_1R, SU_3R)
+SU_3R = ClassicModel("Su 3R (load-independent, Table 1)", (0.10, 0.35, 0.40, 0.15),
+                     (3.51, 2.99, 2.58), "Su, J. Mech. Robot. 1(2), 2009, Table 1")
+SU_3R_MOMENT = ClassicModel("Su 3R (end-moment set)", (0.10, 0.35, 0.40, 0.15),
+                            (3.51933, 2.78518, 2.79756),
+                            "Su, J. Mech. Robot. 1(2), 2009, pure end moment")
+SU_3R_FORCE = ClassicModel("Su 3R (end-force set)", (0.10, 0.35, 0.40, 0.15),
+                           (3.71591, 2.87128, 2.26417),
+                           "Su, J. Mech. Robot. 1(2), 2009, transverse end force")
+CLASSIC_MODELS = (HOWELL_1R, SU_3R, SU_3R_MOMENT, SU_3R_FORCE)

@@ -8,11 +8,12 @@ pinflex's own losses of the same chain (with the mean factor, eq. 25, at the str
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import replace
 
 import numpy as np
 
-from ..exceptions import InvalidChain
+from ..exceptions import InvalidChain, UnsolvedLoadWarning
 from .beams import Planform
 from .fit import PrbdmFit, make_fit
 from .paper import Definitions, code_tip_force, definitions_named
@@ -73,6 +74,7 @@ def paper_losses_of(problem: PosedProblem, posed: PosedFit) -> dict[str, float]:
     freq = float(combine(posed.pose_frequency))
     if problem.definitions.deflection == "per-pose":
         defl = float(combine(deflection_errors(problem, gamma[None], factors[None])[0]))
+        _warn_unsolved(problem, tip_positions(problem, gamma[None], factors[None])[1])
         return {"frequency": freq, "deflection": defl, "combined": float(np.hypot(freq, defl))}
     per_pose = posed.pose_frequency
     # Eq. 19 with the mean factor (eq. 25), RMS over the loads, as the text reading's.
@@ -87,8 +89,18 @@ def _text_eq19(problem: PosedProblem, gamma: np.ndarray, factor: np.ndarray) -> 
     tips, ok = tip_positions(problem, gamma[None], factor)
     truth = problem.truth_tips_m
     err = np.linalg.norm(tips[0, 0] - truth, axis=1) / np.linalg.norm(truth, axis=1)
+    _warn_unsolved(problem, ok)
     err = np.where(ok[0, 0], err, 1.0)
     return float(np.sqrt(np.mean(err**2)))
+
+
+def _warn_unsolved(problem: PosedProblem, ok: np.ndarray) -> None:
+    """Warn when a reported deflection loss counts unsolved loads as 100 % errors."""
+    failed = int(np.count_nonzero(~np.asarray(ok)))
+    if failed:
+        warnings.warn(f"{failed} of {np.asarray(ok).size} tip statics (loads x poses) found no "
+                      f"equilibrium; the reported {problem.definitions.name} deflection loss "
+                      "counts each as a 100 % error", UnsolvedLoadWarning, stacklevel=3)
 
 
 def fit_by_definitions(planform: Planform, n_joints: int, n_modes: int | None = None,

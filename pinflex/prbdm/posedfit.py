@@ -289,11 +289,38 @@ def objective_values(problem: PosedProblem, gammas: np.ndarray, objective: str) 
     return best_factors(problem, gammas, objective).value
 
 
+def project_fractions(points: np.ndarray) -> np.ndarray:
+    """Euclidean projection of first-n fractions (S, n) onto the feasible set.
+
+    The set is every fraction >= 0.02 with the last one, 1 - sum, >= 0.02 too: with
+    y = z - 0.02 it is {y >= 0, sum y <= r}, r = 1 - 0.02 (n + 1), whose projection is the
+    clipped point when that is inside, else the projection onto the face sum y = r.
+    """
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    n = points.shape[1]
+    r = 1.0 - MIN_FRACTION * (n + 1)
+    y = points - MIN_FRACTION
+    out = np.clip(y, 0.0, None)
+    for i in np.flatnonzero(out.sum(1) > r):
+        u = np.sort(y[i])[::-1]
+        cum = np.cumsum(u) - r
+        rho = np.flatnonzero(u - cum / np.arange(1, n + 1) > 0)[-1]
+        out[i] = np.clip(y[i] - cum[rho] / (rho + 1), 0.0, None)
+    return out + MIN_FRACTION
+
+
+#: Weight of the squared distance to the feasible set added to a polish's objective outside it.
+OUTSIDE_PENALTY = 1e3
+
+
 def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: float,
             counter: list[int]) -> tuple[float, np.ndarray]:
     """SLSQP on the first n fractions (the last one closes the simplex) from gamma0.
 
-    Each gradient is a forward difference, its n + 1 designs evaluated in one batch.
+    Each gradient is a forward difference, its n + 1 designs evaluated in one batch. SLSQP
+    may step outside the feasible set (its line search and the difference steps at a bound):
+    there a design is evaluated at its projection onto the set, plus a penalty on the
+    squared distance, so no link gets a length at or below zero (which has no mass matrix).
     """
     n = problem.n_joints
     step = 1e-7 if objective == "eigen" else 1e-6
@@ -308,7 +335,9 @@ def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: floa
         if key not in cache:
             points = np.repeat(z[None], n + 1, axis=0)
             points[1:] += step * np.eye(n)
-            values = objective_values(problem, designs(points), objective)
+            inside = project_fractions(points)
+            values = objective_values(problem, designs(inside), objective) \
+                + OUTSIDE_PENALTY * np.sum((points - inside) ** 2, axis=1)
             counter[0] += n + 1
             cache.clear()
             cache[key] = (float(values[0]), (values[1:] - values[0]) / step)
@@ -321,8 +350,7 @@ def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: floa
     res = minimize(lambda z: value_and_grad(z)[0], z0, jac=lambda z: value_and_grad(z)[1],
                    method="SLSQP", bounds=bounds, constraints=cons,
                    options={"maxiter": 200, "ftol": tol})
-    z = np.clip(res.x, MIN_FRACTION, None)
-    z = z if 1.0 - z.sum() >= MIN_FRACTION * (1.0 - 1e-9) else z0
+    z = project_fractions(res.x)[0]
     candidates = designs(np.array([z, z0]))
     values = objective_values(problem, candidates, objective)
     counter[0] += 2
