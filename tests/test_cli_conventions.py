@@ -36,3 +36,19 @@ def test_usage_errors_are_one_line(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["pinflex modes: error: argument --modes: invalid int value: 'abc' "
                    "(see 'pinflex modes --help')"]
+
+
+def test_version_is_the_package_version(capsys):
+    """`pinflex --version` prints the installed package's version and exits 0."""
+    from importlib.metadata import version
+
+    import pytest
+
+    import pinflex
+    from pinflex.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"pinflex {pinflex.__version__}"
+    assert version("pinflex") == pinflex.__version__  # pyproject.toml and the package agree
