@@ -139,6 +139,19 @@ def _placement_constants(plan: ModelPlan) -> tuple:
     return tuple(rows)
 
 
+#: What ``dir(model)`` lists and the documentation describes: the queries, construction and
+#: the model's joint and design attributes. The other methods (pose checks, assembly terms,
+#: root twists, ...) serve pinflex's own layers.
+PUBLIC = (
+    "model", "description", "plan", "nv", "nx", "ny", "ndof", "n_elastic", "n_rigid", "planar",
+    "plane_normal", "coordinates", "joint_names", "joint_conditions", "joint_switch",
+    "joint_labels", "kept_joints", "design", "design_names", "y0", "point_mass_values",
+    "frequencies", "modes", "matrices", "node_placements", "effective_inertias",
+    "effective_model", "pin_configuration", "from_configuration", "from_pinocchio",
+    "with_values", "create_data", "workspace",
+)
+
+
 class FlexibleModel:
     """A URDF arm whose annotated links are finite-element beams (ERLS).
 
@@ -304,6 +317,16 @@ class FlexibleModel:
     def __delattr__(self, name: str) -> None:
         """Refused: the model is constant."""
         raise ImmutableModelError(f"FlexibleModel is constant once built: cannot delete '{name}'")
+
+    def __repr__(self) -> str:
+        """Robot, dof, flexible links, joint conditions and design, in a few lines."""
+        from pinflex.summaries import model_summary
+
+        return model_summary(self)
+
+    def __dir__(self) -> list[str]:
+        """The public surface (:data:`PUBLIC`); the methods other layers call stay callable."""
+        return sorted(set(PUBLIC) | {n for n in object.__dir__(self) if n.startswith("_")})
 
     def __getstate__(self) -> dict:
         """State for pickling (the per-thread workspaces stay behind)."""
