@@ -62,3 +62,17 @@ def test_flexible_model_prints_its_summary_and_lists_its_public_surface(two_link
     assert public == sorted(PUBLIC)
     assert "check_q" not in public and "pose_terms_one" not in public
     assert all(hasattr(two_link_planar, n) for n in PUBLIC)
+
+
+def test_result_reprs_summarise(two_link_planar):
+    """An assignment result prints its fields with arrays summarised, in under 40 lines."""
+    import pinflex
+    from pinflex.assignment.study import user_trajectory
+
+    traj = user_trajectory(two_link_planar, "benchmark_a")
+    result = pinflex.assign_frequencies(two_link_planar, traj, [pinflex.Target(1, 190.0)],
+                                        q0=[1.817, 5.312])
+    text = repr(result)
+    assert "array(" not in text and len(text.splitlines()) < 40
+    assert f"max_error_after={result.max_error_after:.6g}" in text
+    assert "freq_after_hz=<152×1 float64" in text

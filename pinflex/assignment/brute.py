@@ -15,6 +15,7 @@ from pinflex.assignment.targets import Target, target_matrix
 from pinflex.erls import FlexibleModel
 from pinflex.erls.model import add_design_masses
 from pinflex.exceptions import ConfigurationError
+from pinflex.summaries import dataclass_summary
 from pinflex.trajectory import Trajectory
 
 
@@ -30,6 +31,8 @@ class BruteForceResult:
         evaluations: Number of designs evaluated.
         spacing: Final grid spacing per variable [kg].
     """
+
+    __repr__ = dataclass_summary  # fields summarised: no array dumps
 
     y_best_cost: np.ndarray
     best_cost: float

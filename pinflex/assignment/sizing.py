@@ -37,6 +37,7 @@ import numpy as np
 from pinflex.erls.design import design_mass
 from pinflex.exceptions import AssignmentWarning, ConfigurationError
 from pinflex.parametric import expand
+from pinflex.summaries import dataclass_summary
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,8 @@ class SizingResult:
         status: ``"met"`` when every floor (and the budget) holds on the exact model, else
             ``"floors_unmet"`` (the command line then exits with 3).
     """
+
+    __repr__ = dataclass_summary  # fields summarised: no array dumps
 
     design: dict[str, float]
     y: np.ndarray
