@@ -52,3 +52,15 @@ def test_version_is_the_package_version(capsys):
     assert stop.value.code == 0
     assert capsys.readouterr().out.strip() == f"pinflex {pinflex.__version__}"
     assert version("pinflex") == pinflex.__version__  # pyproject.toml and the package agree
+
+
+def test_simulate_reports_progress_by_stage(capsys):
+    """`pinflex simulate` draws one bar over the assignment and the two simulations."""
+    import re
+
+    from pinflex.cli.simulate import run_study
+
+    study = Path(__file__).resolve().parents[1] / "examples" / "benchmark_a.toml"
+    run_study(study, progress=True)
+    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("simulate")]
+    assert re.match(r"simulate: assignment, baseline, assigned \[#+\] 3/3 100%", err[-1]), err
