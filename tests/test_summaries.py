@@ -51,6 +51,7 @@ def test_taylor_summary_names_order_variables_modes_and_radius(two_link_planar):
     r = np.asarray(tm.radius)
     assert f"mode 2: {array_summary(r[:, 1])}" in text
     assert "array(" not in text and len(text) < 600
+    assert repr(tm) == text
 
 
 def test_flexible_model_prints_its_summary_and_lists_its_public_surface(two_link_planar):

@@ -24,6 +24,7 @@ from pinflex.jets.evaluation import monomial_rows
 from pinflex.linalg import readonly as _readonly
 from pinflex.parametric import evaluation
 from pinflex.parametric.evaluation import RADIUS_TOL, EvaluationPlan
+from pinflex.summaries import taylor_summary
 
 _TINY = np.finfo(float).tiny
 _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python-level wrapper per call
@@ -81,6 +82,9 @@ class TaylorModel:
     degree_blocks: Mapping[str, np.ndarray] = field(init=False, repr=False, compare=False)
     spectral_weights: np.ndarray | None = field(init=False, repr=False, compare=False)
     evaluation_plan: EvaluationPlan = field(init=False, repr=False, compare=False)
+
+    def __repr__(self) -> str:
+        return taylor_summary(self)  # order, variables, modes, radius: no array dumps
 
     def __post_init__(self) -> None:
         if self.freq_jets is None:
