@@ -64,3 +64,60 @@ def test_simulate_reports_progress_by_stage(capsys):
     run_study(study, progress=True)
     err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("simulate")]
     assert re.match(r"simulate: assignment, baseline, assigned \[#+\] 3/3 100%", err[-1]), err
+
+
+def _bar_lines(stream) -> list[str]:
+    return [ln for ln in stream.getvalue().splitlines() if ln.strip()]
+
+
+def test_modes_along_reports_progress_per_chunk_and_chunks_change_nothing(monkeypatch):
+    """Tracking solves its samples in chunks (one bar step per sample); the chunked tracking
+    of a UR5 motion, whose shapes are compared across chunk boundaries through the joined pose
+    map, equals the one-batch tracking: frequencies, order, step MACs and events."""
+    import io
+
+    import numpy as np
+
+    import pinflex
+    from pinflex.erls import tracking
+    from pinflex.erls.along import modes_along
+    from pinflex.progress import ProgressBar
+    from pinflex.trajectory.cartesian import path_from_spec
+
+    arm = pinflex.FlexibleModel(ROOT / "urdf" / "ur5_flexible.xml")
+    traj = path_from_spec(arm, {"frame": "ee_link", "waypoints": [[0.15, 0, -0.1]],
+                                "relative": True, "start_q": [0, -1, 1.2, 0.3, 0.5, 0],
+                                "samples": 40, "duration_s": 2})
+    whole = modes_along(arm, traj, modes=4)
+    monkeypatch.setattr(tracking, "_CHUNK", 7)
+    out = io.StringIO()
+    bar = ProgressBar(traj.n_samples, "modes along: samples", stream=out, log_interval_s=0.0)
+    chunked = modes_along(arm, traj, modes=4, progress=bar)
+    lines = _bar_lines(out)
+    assert len(lines) == 6 and lines[-1].startswith("modes along: samples [")
+    assert " 40/40 100%" in lines[-1]
+    assert [int(ln.split("] ")[1].split("/")[0]) for ln in lines] == [7, 14, 21, 28, 35, 40]
+    np.testing.assert_allclose(chunked.freq_hz, whole.freq_hz, rtol=1e-12)
+    np.testing.assert_array_equal(chunked.order, whole.order)
+    np.testing.assert_allclose(chunked.mac_step, whole.mac_step, rtol=1e-10, atol=1e-12)
+    assert chunked.events == whole.events
+
+
+def test_path_reports_progress_per_sample(tmp_path, monkeypatch):
+    """`pinflex path` advances its bar once per IK sample (position-only and with orientation)."""
+    import io
+
+    import pinflex
+    from pinflex.progress import ProgressBar
+    from pinflex.trajectory.cartesian import path_from_spec
+
+    arm = pinflex.FlexibleModel(ROOT / "urdf" / "ur5_flexible.xml")
+    for orientation in ("free", "keep"):
+        out = io.StringIO()
+        bar = ProgressBar(25, "path: samples", stream=out, log_interval_s=0.0)
+        traj = path_from_spec(arm, {"frame": "ee_link", "waypoints": [[0.1, 0, -0.05]],
+                                    "relative": True, "start_q": [0, -1, 1.2, 0.3, 0.5, 0],
+                                    "samples": 25, "orientation": orientation}, progress=bar)
+        lines = _bar_lines(out)
+        assert traj.n_samples == 25 and len(lines) == 25, orientation
+        assert " 25/25 100%" in lines[-1] and " 1/25 " in lines[0]

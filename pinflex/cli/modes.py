@@ -25,6 +25,9 @@ def add_parser(sub) -> None:
     p.add_argument("--png", metavar="OUT", nargs="?", const="",
                    help="with --trajectory: write a chart (default name: the trajectory's "
                    "with _modes.png)")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar on stderr (shown by default when stderr is a terminal;"
+                   " with --trajectory)")
     p.set_defaults(func=cmd_modes)
 
 
@@ -104,11 +107,17 @@ def cmd_modes(args: argparse.Namespace) -> int:
 
 
 def _along(model, args: argparse.Namespace) -> int:
+    import sys
+
     from pinflex.erls.along import modes_along
+    from pinflex.progress import ProgressBar
     from pinflex.trajectory import Trajectory
 
     traj = Trajectory.from_csv(args.trajectory)
-    res = modes_along(model, traj, modes=args.modes or 3)
+    bar = ProgressBar(traj.n_samples, "modes along: samples",
+                      enabled=not args.no_progress and sys.stderr.isatty())
+    res = modes_along(model, traj, modes=args.modes or 3, progress=bar)
+    bar.close()
     if args.csv:
         res.to_csv(args.csv)
     if args.png is not None:

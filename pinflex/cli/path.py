@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
 from pinflex.cli.common import add_model_arguments, parse_values
+from pinflex.progress import ProgressBar
 
 
 def add_parser(sub) -> None:
@@ -35,6 +37,8 @@ def add_parser(sub) -> None:
                    help="warn instead of failing when a sample leaves the joint limits")
     add_model_arguments(p)
     p.add_argument("--out", required=True, help="CSV file to write")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar on stderr (shown by default when stderr is a terminal)")
     p.set_defaults(func=cmd_path)
 
 
@@ -64,7 +68,10 @@ def cmd_path(args: argparse.Namespace) -> int:
         "orientation": orientation,
         "on_limits": "warn" if args.warn_limits else "raise",
     }
-    traj = path_from_spec(model, spec)
+    bar = ProgressBar(args.samples, "path: samples",
+                      enabled=not args.no_progress and sys.stderr.isatty())
+    traj = path_from_spec(model, spec, progress=bar)
+    bar.close()
     traj.to_csv(args.out)
     speed = np.abs(np.diff(traj.q, axis=0) / np.diff(traj.times_s)[:, None]).max(axis=0)
     print(f"{traj.n_samples} samples over {traj.duration_s:.4g} s written to {args.out}")

@@ -20,6 +20,7 @@ from typing import Any, Literal
 import numpy as np
 
 from pinflex.exceptions import ConfigurationError, InvalidTrajectory
+from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory
 
 
@@ -214,6 +215,7 @@ def modes_along(
     check_limits: Literal["warn", "raise"] | None = "warn",
     strict: bool = False,
     validity_threshold: float | None = None,
+    progress: ProgressBar | None = None,
 ) -> ModesAlong:
     """Tracked eigenfrequencies of ``arm`` along ``trajectory``.
 
@@ -232,6 +234,8 @@ def modes_along(
             (:class:`~pinflex.exceptions.ModelValidityWarning`): the frozen-pose modes are
             not those of the moving arm there (:func:`pinflex.dynamics.modes_at_speed`).
         validity_threshold: Default :data:`pinflex.erls.validity.VALIDITY_THRESHOLD`.
+        progress: A progress bar advanced by one per sample solved (optional; see
+            :func:`~pinflex.erls.tracking.track_modes`).
 
     Returns:
         :class:`ModesAlong` (``validity`` set for two samples or more).
@@ -249,7 +253,7 @@ def modes_along(
     )
     if not mode_list or min(mode_list) < 1 or max(mode_list) > arm.n_elastic:
         raise ConfigurationError(f"modes {mode_list} must lie in 1..{arm.n_elastic}")
-    tr = track_modes(arm, Q, y, modes=mode_list, extra=extra)
+    tr = track_modes(arm, Q, y, modes=mode_list, extra=extra, progress=progress)
     sorted_all = np.sqrt(np.asarray(tr.sorted_eigvals)) / (2.0 * np.pi)
     k = len(mode_list)
     times = np.asarray(trajectory.times_s, dtype=float)

@@ -22,6 +22,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from pinflex.exceptions import IKNotConverged, InvalidPath, LinkNotFound
+from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory, solve_ik
 
 
@@ -67,11 +68,14 @@ def solve_pose_ik(
     *,
     tol: float = 1e-10,
     max_iter: int = 200,
+    progress: ProgressBar | None = None,
 ) -> np.ndarray:
     """Position and orientation IK (Levenberg–Marquardt), warm-started along the points.
 
     The error is ``[p* − p; log₃(R* Rᵀ)]`` in world axes (metres and radians weighted alike),
     the Jacobian the frame's LOCAL_WORLD_ALIGNED one; a step is kept when it lowers the error.
+
+    ``progress`` (optional) is advanced by one per sample solved.
 
     Returns:
         Configurations (ns, nq).
@@ -106,6 +110,8 @@ def solve_pose_ik(
         if norm > tol:
             raise IKNotConverged(k, target, norm, q, tol)
         out[k] = q
+        if progress is not None:
+            progress.update()
     return out
 
 
@@ -122,6 +128,7 @@ def path_trajectory(
     on_limits: Literal["raise", "warn"] = "raise",
     tol: float = 1e-10,
     name: str | None = None,
+    progress: ProgressBar | None = None,
 ) -> Trajectory:
     """Joint trajectory of ``arm`` whose ``frame`` follows straight lines through waypoints.
 
@@ -142,6 +149,8 @@ def path_trajectory(
             outside the URDF joint limits.
         tol: IK tolerance [m, rad].
         name: Label of the trajectory.
+        progress: A progress bar advanced by one per sample solved (optional; its total
+            should be ``n_samples``).
 
     Returns:
         A :class:`~pinflex.Trajectory` in the arm's coordinates with its joint names.
@@ -159,7 +168,7 @@ def path_trajectory(
     q0 = np.zeros(arm.nv) if q_init is None else arm.check_q(q_init)
     qpin0 = arm.pin_configuration(q0)
     if orientation is None:
-        qpin = np.array(solve_ik(model, data, fid, pts, qpin0, tol_m=tol).q)
+        qpin = np.array(solve_ik(model, data, fid, pts, qpin0, tol_m=tol, progress=progress).q)
     else:
         if isinstance(orientation, str):
             if orientation != "keep":
@@ -172,7 +181,7 @@ def path_trajectory(
                 R = pin.rpy.rpyToMatrix(*R)
             if R.shape != (3, 3) or np.abs(R.T @ R - np.eye(3)).max() > 1e-9:
                 raise InvalidPath("orientation must be a rotation matrix (3, 3) or rpy (3,)")
-        qpin = solve_pose_ik(model, data, fid, pts, R, qpin0, tol=tol)
+        qpin = solve_pose_ik(model, data, fid, pts, R, qpin0, tol=tol, progress=progress)
     q = arm.from_configuration(qpin)
     # continuous joints come back in (-pi, pi]: unwrap along the motion, starting near q_init
     rel = q @ arm.coord_map.T
@@ -225,7 +234,8 @@ _PATH_KEYS = {"frame", "waypoints", "relative", "start_q", "samples", "duration_
               "orientation", "on_limits"}
 
 
-def path_from_spec(arm, spec: dict, *, name: str | None = None) -> Trajectory:
+def path_from_spec(arm, spec: dict, *, name: str | None = None,
+                   progress: ProgressBar | None = None) -> Trajectory:
     """Trajectory of a path specification (the ``[trajectory.path]`` table of a study).
 
     Keys: ``frame`` (required), ``waypoints`` (required, list of [x, y, z] [m]),
@@ -233,7 +243,8 @@ def path_from_spec(arm, spec: dict, *, name: str | None = None) -> Trajectory:
     prepended as the first point; default false), ``start_q`` (joint values, default zeros),
     ``samples`` (default 50), ``duration_s`` (default 1), ``profile``
     (``minimum_jerk``/``uniform``), ``orientation`` (``"keep"``, ``"free"`` (default) or
-    roll-pitch-yaw [rad]), ``on_limits`` (``raise``/``warn``).
+    roll-pitch-yaw [rad]), ``on_limits`` (``raise``/``warn``). ``progress`` (optional) is
+    advanced by one per sample solved.
     """
     unknown = set(spec) - _PATH_KEYS
     if unknown:
@@ -257,5 +268,5 @@ def path_from_spec(arm, spec: dict, *, name: str | None = None) -> Trajectory:
         duration_s=float(spec.get("duration_s", 1.0)),
         profile=spec.get("profile", "minimum_jerk"),
         q_init=q0, orientation=orientation,
-        on_limits=spec.get("on_limits", "raise"), name=name,
+        on_limits=spec.get("on_limits", "raise"), name=name, progress=progress,
     )
