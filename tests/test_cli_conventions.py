@@ -121,3 +121,36 @@ def test_path_reports_progress_per_sample(tmp_path, monkeypatch):
         lines = _bar_lines(out)
         assert traj.n_samples == 25 and len(lines) == 25, orientation
         assert " 25/25 100%" in lines[-1] and " 1/25 " in lines[0]
+
+
+def test_long_commands_take_no_progress():
+    """Every command the command-line reference names as drawing a progress bar accepts
+    --no-progress."""
+    import argparse
+    import importlib.util
+    import re
+
+    from pinflex.cli import build_parser
+
+    spec = importlib.util.spec_from_file_location("reference", ROOT / "docs" / "_site" /
+                                                  "reference.py")
+    assert spec is not None and spec.loader is not None
+    reference = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(reference)
+    page = reference.cli_page()
+    named = re.search(r"progress bar on stderr when it is a terminal \((.*?)\)", page,
+                      flags=re.S).group(1)
+    commands = {c.split()[0] for c in re.findall(r"`([a-z -]+)`", named)}
+    assert {"modes", "path", "simulate", "view"} <= commands
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+
+    def runners(p):  # the parsers that run work: the command, or its own subcommands (batch)
+        subs = [a for a in p._actions if isinstance(a, argparse._SubParsersAction)]
+        if not subs:
+            return [p]
+        return [c for a in subs for n, c in a.choices.items() if n != "report"]
+
+    for name in sorted(commands):
+        for p in runners(sub.choices[name]):
+            assert "--no-progress" in {o for a in p._actions for o in a.option_strings}, p.prog

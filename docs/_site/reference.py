@@ -246,9 +246,15 @@ def cli_page() -> str:
         _GENERATED.format(source="the argument parsers of pinflex.cli"),
         "# Command line",
         "",
-        "`pinflex SUBCOMMAND --help` prints the same text. Exit status: 0 on success, 2 for a "
-        "user error (one line on stderr saying what to fix), 1 for an internal error, 130 "
-        "when interrupted.",
+        "`pinflex SUBCOMMAND --help` prints the same text. Exit status: 0 on success; 3 when "
+        "`assign` or `size` ran but the exact model does not meet the targets, floors or "
+        "constraints; 2 for a user error (one line on stderr saying what to fix); 1 for an "
+        "internal error (one line; `--debug` shows the traceback); 130 when interrupted; 141 "
+        "when the reader of standard output went away (`pinflex modes ... | head`).",
+        "",
+        "Long commands draw a progress bar on stderr when it is a terminal (`modes "
+        "--trajectory`, `path`, `assign`, `size`, `simulate`, `view`, `batch`, `prbdm`); "
+        "`--no-progress` hides it.",
         "",
         "```text",
         parser.format_help().rstrip(),
