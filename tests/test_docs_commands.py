@@ -1,14 +1,16 @@
-"""The command lines the docs and the README show are ones the command line accepts.
+"""The command lines and Python names the docs and the README show exist in the code.
 
 Every ``pinflex ...`` line of a ``bash`` block parses with pinflex's own parser (files need
 not exist: only the arguments are checked); every ``--option`` of a ``pinflex SUBCOMMAND``
-written anywhere else (synopsis blocks, inline code) is an option of that subcommand.
+written anywhere else (synopsis blocks, inline code) is an option of that subcommand; every
+dotted name ``pinflex.a.b`` the pages write resolves (a module, or an attribute of one).
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import io
 import re
 import shlex
@@ -83,3 +85,33 @@ def test_options_named_in_the_docs_exist(page):
         known = _options(parser)
         for opt in (w.split("=")[0] for w in words if w.startswith("--")):
             assert opt in known, (page.relative_to(ROOT), span, opt)
+
+
+# written as examples of a rule or as package data, not importable names
+NOT_NAMES = {"pinflex.other", "pinflex.urdf"}
+
+
+def _resolves(name: str) -> bool:
+    parts = name.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for part in parts[i:]:
+            if not hasattr(obj, part):
+                return False
+            obj = getattr(obj, part)
+        return True
+    return False
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_python_names_in_the_docs_resolve(page):
+    """Every `pinflex.module.name` on the page is a module of pinflex or an attribute of one
+    (a moved or renamed function fails here and in the site's --strict build)."""
+    names = set(re.findall(r"\b(pinflex(?:\.[A-Za-z_][A-Za-z0-9_]*)+)", page.read_text()))
+    for name in sorted(names - NOT_NAMES):
+        if name.endswith((".py", ".md", ".toml", ".xml", ".html", ".yml", ".csv", ".json")):
+            continue
+        assert _resolves(name), (page.relative_to(ROOT), name)
