@@ -17,8 +17,10 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "AssignmentResult": "pinflex.assignment",
     "Beam": "pinflex.native.spec",
+    "Body": "pinflex.native.spec",
     "FlexibleData": "pinflex.erls",
     "FlexibleModel": "pinflex.erls",
+    "JointSpec": "pinflex.native.spec",
     "Mass": "pinflex.native.spec",
     "Material": "pinflex.materials",
     "ModalResult": "pinflex.erls",
@@ -35,6 +37,7 @@ _EXPORTS = {
     "expand": "pinflex.parametric",
     "load": "pinflex.description",
     "matrix_jets": "pinflex.parametric",
+    "servo": "pinflex.native.spec",
 }
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
@@ -43,8 +46,10 @@ __all__ = [
     "__version__",
     "AssignmentResult",
     "Beam",
+    "Body",
     "FlexibleData",
     "FlexibleModel",
+    "JointSpec",
     "Mass",
     "Material",
     "ModalResult",
@@ -61,6 +66,7 @@ __all__ = [
     "expand",
     "load",
     "matrix_jets",
+    "servo",
 ]
 
 if TYPE_CHECKING:
@@ -76,6 +82,6 @@ if TYPE_CHECKING:
     from pinflex.erls.robots import example_robot
     from pinflex.exceptions import PinflexError, PinflexWarning
     from pinflex.materials import Material
-    from pinflex.native.spec import Beam, Mass
+    from pinflex.native.spec import Beam, Body, JointSpec, Mass, servo
     from pinflex.parametric import TaylorModel, expand, matrix_jets
     from pinflex.trajectory import Trajectory

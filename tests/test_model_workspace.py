@@ -103,6 +103,18 @@ def test_with_values_of_a_parameter_equals_the_file_with_that_value(tmp_path):
                      ('name="D_upper" value="0.09"', 'name="D_upper" value="0.1"')):
         assert old in text
         text = text.replace(old, new)
+    # the URDF inertia a tube link keeps (URDF minus the tube at the file's values: the motors
+    # do not change with the tube) stays with the values; the fresh file states it as bodies
+    assert model.description.bodies
+    kept = "".join(
+        f'  <pinflex:body name="{b.name}.fixed" link="{b.link}" '
+        f'xyz="{" ".join(repr(float(c)) for c in b.com)}" mass="{float(b.mass)!r}" '
+        + " ".join(f'i{a}="{float(b.inertia[i, j])!r}"' for a, i, j in (
+            ("xx", 0, 0), ("xy", 0, 1), ("xz", 0, 2), ("yy", 1, 1), ("yz", 1, 2), ("zz", 2, 2)))
+        + "/>\n" for b in model.description.bodies)
+    assert text.count("<pinflex:flexible ") == len(model.description.bodies)
+    text = text.replace("<pinflex:flexible ", '<pinflex:flexible inertia="beam-only" ')
+    text = text.replace("</pinflex:overlay>", kept + "</pinflex:overlay>")
     (tmp_path / "tubes.xml").write_text(text)
     fresh = FlexibleModel(tmp_path / "tubes.xml")
     np.testing.assert_allclose(changed.frequencies(q), fresh.frequencies(q), rtol=1e-12)

@@ -162,8 +162,14 @@ def test_effective_inertias_closed_form_and_crba(ur10_overlay):
     # the URDF inertia stays on arm.model: 12.93 kg upper arm in ur10_robot.urdf
     jid = arm.model.getJointId("shoulder_lift_joint")
     assert arm.model.inertias[jid].mass == pytest.approx(12.93)
+    # the effective model: beam + the part of the URDF link beyond it (motors, flanges) kept
+    # as a rigid body = the URDF link itself
     eff = arm.effective_model()
-    assert eff.inertias[jid].mass == pytest.approx(m, rel=1e-12)
+    assert arm.effective_model(point_masses=False).inertias[jid].mass == pytest.approx(12.93)
+    np.testing.assert_allclose(eff.inertias[jid].lever, arm.model.inertias[jid].lever,
+                               atol=1e-12)
+    np.testing.assert_allclose(eff.inertias[jid].inertia, arm.model.inertias[jid].inertia,
+                               atol=1e-12)
     # Pinocchio's CRBA of the effective model = the modal model's rigid block
     M, _ = arm.matrices(Q_UR10)
     Mq = pin.crba(eff, eff.createData(), arm.pin_configuration(Q_UR10))

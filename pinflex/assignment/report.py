@@ -8,7 +8,7 @@ its slack and whether it is active at the answer. The result writes itself as CS
 one row per sample and mode), JSON, or Parquet when pyarrow is installed.
 
 Activity: a constraint is *active* when its slack at the answer is below ``1e-6`` of its scale
-(the budget in kg, the floor or band edge in Hz, the bound range in kg). Floors and bands are
+(the budget in kg, the floor or band edge in Hz, the bound range in the variable's unit). Floors and bands are
 imposed on the prediction; their exact slack (exact frequencies after) is reported too, and a
 negative exact slack means that the exact model crosses a floor or enters a band that the
 prediction kept clear.
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import csv
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -43,12 +43,13 @@ class AssignmentData:
         predicted_hz: (ns, nm) Taylor prediction at the design after [Hz], NaN for modes the
             Taylor model does not carry.
         after_hz: (ns, nm) exact frequencies of the design after [Hz].
-        design_before: ``{name: kg}`` before.
-        design_after: ``{name: kg}`` after.
+        design_before: ``{name: value}`` before, each in its variable's unit.
+        design_after: ``{name: value}`` after.
         constraints: One dictionary per constraint: ``name``, ``kind`` (``budget``, ``floor``,
             ``band``, ``lower_bound``, ``upper_bound``, ``inequality``), ``value``, ``limit``,
             ``slack`` (>= 0 when satisfied), ``active``, ``exact_slack`` (floors and bands),
-            ``unit``.
+            ``unit`` (a bound's is its variable's).
+        design_units: ``{name: unit}`` of the design variables.
     """
 
     times_s: np.ndarray
@@ -63,6 +64,7 @@ class AssignmentData:
     design_before: dict
     design_after: dict
     constraints: tuple[dict, ...]
+    design_units: dict = field(default_factory=dict)
 
     @property
     def active(self) -> list[str]:
@@ -131,6 +133,7 @@ class AssignmentData:
             "q": self.q.tolist(),
             "design_before": self.design_before,
             "design_after": self.design_after,
+            "design_units": self.design_units,
             "modes": [
                 {
                     "mode": m,
@@ -258,17 +261,20 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
     for j in didx:
         d = model.design[j]
         scale = (d.upper - d.lower) if np.isfinite(d.upper) else max(1.0, abs(d.lower))
-        constraints.append(dict(name=f"{names[j]} >= {d.lower:g} kg", kind="lower_bound",
+        unit = d.unit
+        constraints.append(dict(name=f"{names[j]} >= {d.lower:g} {unit}".rstrip(),
+                                kind="lower_bound",
                                 value=float(y[j]), limit=float(d.lower),
                                 slack=float(y[j] - d.lower),
                                 active=_is_active(float(y[j] - d.lower), scale),
-                                exact_slack=None, unit="kg"))
+                                exact_slack=None, unit=unit))
         if np.isfinite(d.upper):
-            constraints.append(dict(name=f"{names[j]} <= {d.upper:g} kg", kind="upper_bound",
+            constraints.append(dict(name=f"{names[j]} <= {d.upper:g} {unit}".rstrip(),
+                                    kind="upper_bound",
                                     value=float(y[j]), limit=float(d.upper),
                                     slack=float(d.upper - y[j]),
                                     active=_is_active(float(d.upper - y[j]), scale),
-                                    exact_slack=None, unit="kg"))
+                                    exact_slack=None, unit=unit))
     prob = result.problem
     first_user = 1 if budget is not None else 0
     groups = list(prob.constraint_groups)
@@ -293,4 +299,5 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
         design_before={n: float(v) for n, v in zip(names, result.y_before)},
         design_after=dict(result.design),
         constraints=tuple(constraints),
+        design_units={d.name: d.unit for d in model.design},
     )

@@ -99,7 +99,8 @@ STUDY: dict[str, Key] = {
     }),
     "expansion": Key("table", doc="the Taylor model", keys={
         "q0": Key("floats", doc="expansion pose (default: the middle sample)"),
-        "y0": Key("mapping", ge=0.0, doc="expansion design {name = kg}"),
+        "y0": Key("mapping", ge=0.0, doc="expansion design {name = value} (each in its "
+                  "variable's unit)"),
         "order": Key("int", ge=0, le=MAX_TAYLOR_ORDER, doc="Taylor order"),
         "quantity": Key("str", choices=("freq_hz", "eigval"), doc="expanded quantity"),
         "design": Key("strs", doc="design variables to choose (default: all)"),
@@ -123,7 +124,7 @@ STUDY: dict[str, Key] = {
         }),
     }),
     "options": Key("table", doc="reporting and refinement", keys={
-        "baseline": Key("mapping", ge=0.0, doc="the 'before' design {name = kg}"),
+        "baseline": Key("mapping", ge=0.0, doc="the 'before' design {name = value}"),
         "refine": Key("bool", doc="re-expand at the answer and solve again"),
         "report_modes": Key("ints", ge=1, doc="further modes to report"),
         "confirm_tol": Key("float", gt=0.0, le=1.0, doc="largest relative difference "
@@ -390,5 +391,6 @@ def _design_names(table, names, where, model, add) -> None:
             continue
         d = model.design[names.index(name)]
         if _number(value) and not d.lower <= value <= d.upper:
-            add(f"{where}.{name}", f"= {value:g} kg is outside the bounds "
-                f"[{d.lower:g}, {d.upper:g}] kg of '{name}'")
+            unit = f" {d.unit}" if getattr(d, "unit", "") else ""
+            add(f"{where}.{name}", f"= {value:g}{unit} is outside the bounds "
+                f"[{d.lower:g}, {d.upper:g}]{unit} of '{name}'")

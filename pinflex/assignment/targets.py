@@ -47,10 +47,13 @@ def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
 
 
 def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> None:
-    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits.
+    """Warn (TrajectoryWarning) when a trajectory leaves the URDF joint limits or is in degrees.
 
     The samples are converted to Pinocchio's joint values, which the limits refer to, and
-    checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off).
+    checked with :meth:`Trajectory.check_limits` (1e-9 of slack for round-off). A revolute
+    or continuous joint whose values go beyond one turn (|q| > 2π) is named as looking like
+    degrees: joint values are in radians, and a continuous joint without limits would
+    otherwise take 90 for a quarter turn silently.
 
     Args:
         model: The flexible model whose URDF holds the limits [rad or m].
@@ -65,7 +68,10 @@ def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> Non
         raise InvalidTrajectory(
             f"the trajectory has samples of shape {q.shape}; the model needs (n_samples, "
             f"{len(model.joint_names)}): one column per joint {list(model.joint_names)}")
+    from pinflex.trajectory.cartesian import warn_if_degrees
+
     joints = [model.description.joints[name] for name in model.joint_names]
     in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
+    warn_if_degrees(model, in_pin.q)
     in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
 

@@ -187,6 +187,8 @@ def cmd_assign(args: argparse.Namespace) -> int:
         files.append(str(data.to_parquet(args.parquet)))
     html = write_preview(model, traj, result, args.html) if args.html else None
     out = summary(result, total)
+    out["design_units"] = {d.name: d.unit for d in model.design}
+    out["link_inertia"] = list(model.description.inertia_notes)
     out["charts"] = charts
     out["files"] = files
     out["html"] = html
@@ -195,8 +197,14 @@ def cmd_assign(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(out))
         return code
-    print(f"design: {', '.join(f'{k} = {v:.5f} kg' for k, v in result.design.items())}")
+    units = {d.name: d.unit for d in model.design}
+    print("design: " + ", ".join(f"{k} = {v:.6g} {units[k]}".rstrip()
+                                 for k, v in result.design.items()))
     print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
+    from pinflex.cli.common import inertia_text
+
+    if inertia_text(model):
+        print(inertia_text(model))
     choice = result.taylor.order_choice
     if choice is not None:
         print(f"Taylor order {choice['order']} for --tol {choice['tol']:g} (two-term estimate "

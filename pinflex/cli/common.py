@@ -49,6 +49,12 @@ def joints_text(model) -> str:
     return "joints: " + ", ".join(f"{n} {v}" for n, v in labels.items())
 
 
+def inertia_text(model) -> str:
+    """One line: what each beam link kept of its URDF inertia (empty when none has one)."""
+    notes = model.description.inertia_notes
+    return ("link inertia: " + "; ".join(notes)) if notes else ""
+
+
 def add_robot_arguments(p: argparse.ArgumentParser) -> None:
     """The robot file, pose, parameters, joints and planar switch of ``modes`` and ``view``."""
     p.add_argument("urdf", help="annotated URDF (or pinflex overlay) file")

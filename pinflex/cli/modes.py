@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, joints_text, parse_values
+from pinflex.cli.common import add_robot_arguments, inertia_text, joints_text, parse_values
 
 
 def add_parser(sub) -> None:
@@ -61,6 +61,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
     # frequencies only: the batched numpy path, which needs no SciPy (fast start-up)
     freqs = model.frequencies(q, n_modes=args.modes)
     y = model.y0
+    held = held_frequencies(model, q, n_modes=min(3, len(freqs)))
     if args.json:
         out = {
             "robot": model.description.name,
@@ -69,11 +70,15 @@ def cmd_modes(args: argparse.Namespace) -> int:
             "joint_names": list(model.joint_names),
             "q": q.tolist(),
             "design": {d.name: float(v) for d, v in zip(model.design, y)},
+            "design_units": {d.name: d.unit for d in model.design},
             "ndof": model.ndof,
             "elastic_dof": model.nx,
             "rigid_modes": model.n_rigid,
             "joint_condition": model.joint_switch,
+            "joint_condition_text": condition_text(model),
             "joints": model.joint_labels(),
+            "held_frequencies_hz": {k: v.tolist() for k, v in held.items()},
+            "link_inertia": list(model.description.inertia_notes),
             "frequencies_hz": freqs.tolist(),
         }
         if fidelity is not None:
@@ -89,9 +94,16 @@ def cmd_modes(args: argparse.Namespace) -> int:
           f"{model.ndof - model.nx} joint), {'planar' if model.planar else 'spatial'}, "
           f"{model.coordinates} joint coordinates")
     print(joints_text(model))
+    print("joint condition: " + condition_text(model))
+    if inertia_text(model):
+        print(inertia_text(model))
+    line = held_line(held)
+    if line:
+        print(line)
     print("q = " + ", ".join(f"{n}={v:.6g}" for n, v in zip(model.joint_names, q)))
     if model.ny:
-        values = ", ".join(f"{d.name}={v:.6g} kg" for d, v in zip(model.design, y))
+        values = ", ".join(f"{d.name}={v:.6g} {d.unit}".rstrip()
+                           for d, v in zip(model.design, y))
         print(f"design: {values}")
     print(f"rigid modes: {model.n_rigid}")
     if fidelity is not None:
@@ -104,6 +116,61 @@ def cmd_modes(args: argparse.Namespace) -> int:
     for i, f in enumerate(freqs, start=1):
         print(f"{i:>4}  {f:>16.6f}")
     return 0
+
+
+def condition_text(model) -> str:
+    """Which joint condition the model uses, in words."""
+    switch = model.plan.conditions.switch
+    kinds = {c.kind for c in model.joint_conditions}
+    if kinds == {"free"}:
+        what = ("free: no joint carries torque (paper 000's condition); the modes are those of "
+                "the arm with its joints' inertia coupling the links")
+    elif kinds == {"locked"}:
+        what = "locked: every joint held rigidly"
+    else:
+        words = {"free": "free", "locked": "locked", "spring": "on springs (servos)"}
+        n = {k: sum(c.kind == k for c in model.joint_conditions) for k in kinds}
+        what = ", ".join(f"{v} {words[k]}" for k, v in sorted(n.items()))
+    annotated = bool(model.description.joint_annotations)
+    src = {"annotated": "the file's <pinflex:joint> annotations" if annotated else
+           "the default: the file has no <pinflex:joint>",
+           "mapping": "the joints given"}.get(switch, f"--joints {switch}")
+    return f"{what} ({src})"
+
+
+def held_frequencies(model, q, n_modes: int = 3) -> dict:
+    """Lowest frequencies [Hz] of the same arm held at its joints, when some joint is free.
+
+    ``{"locked": ...}`` with every joint locked and, when the file annotates springs that the
+    model does not use, ``{"annotated": ...}`` on those springs. Empty when no joint is free.
+    """
+    from pinflex.erls import FlexibleModel
+
+    if model.n_rigid == 0:
+        return {}
+    out = {}
+    values = dict(model.point_mass_values)  # parameters are in the description already
+    for switch in ("locked", "annotated"):
+        if switch == "annotated" and (model.plan.conditions.switch == "annotated" or not any(
+                a.stiffness is not None or a.locked
+                for a in model.description.joint_annotations.values())):
+            continue
+        held = FlexibleModel(model.description, planar=model.planar, joints=switch,
+                             coordinates=model.coordinates, values=values or None)
+        if held.n_elastic:
+            out[switch] = held.frequencies(q, n_modes=n_modes)
+    return out
+
+
+def held_line(held: dict) -> str:
+    """One line: a held arm rings at these modes (empty when nothing is free)."""
+    if not held:
+        return ""
+    parts = [f"{', '.join(f'{f:.4g}' for f in v)} Hz with every joint locked"
+             if k == "locked" else f"{', '.join(f'{f:.4g}' for f in v)} Hz on the file's "
+             "joint springs (servos)" for k, v in held.items()]
+    return ("note: free joints carry no torque; an arm held by its drives rings at its "
+            "locked or servo modes: " + "; ".join(parts))
 
 
 def _along(model, args: argparse.Namespace) -> int:

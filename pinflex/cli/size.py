@@ -53,6 +53,7 @@ def summary(model, result, total_s: float) -> dict:
         "history": [{"y": y.tolist(), "mass_kg": m, "margin_hz": g}
                     for y, m, g in result.history],
         "joints": dict(result.joints),
+        "link_inertia": list(model.description.inertia_notes),
         "timings_s": result.timings_s,
         "total_time_s": total_s,
     }
@@ -87,6 +88,10 @@ def cmd_size(args: argparse.Namespace) -> int:
     print("design: " + ", ".join(f"{k} = {v:.6g} {units[k]}".rstrip()
                                  for k, v in result.design.items()))
     print("joints: " + ", ".join(f"{k} {v}" for k, v in result.joints.items()))
+    from pinflex.cli.common import inertia_text
+
+    if inertia_text(model):
+        print(inertia_text(model))
     print(f"design mass: {result.mass_start_kg:.6g} kg -> {result.mass_kg:.6g} kg "
           f"({result.added_mass_kg:+.6g} kg)")
     modes = sorted({m for m, _ in result.floors})

@@ -62,6 +62,7 @@ from pinflex.description.types import (
     Joint,
     JointAnnotation,
     PointMass,
+    RigidBody,
     RigidInertia,
     RobotDescription,
 )
@@ -75,6 +76,7 @@ __all__ = [
     "Joint",
     "JointAnnotation",
     "PointMass",
+    "RigidBody",
     "RigidInertia",
     "RobotDescription",
     "apply_overlay",

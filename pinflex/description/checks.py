@@ -59,7 +59,7 @@ def _near_namespace(uri: str) -> bool:
 
 
 class _Checker:
-    def __init__(self, doc: XmlDocument, plausibility: str):
+    def __init__(self, doc: XmlDocument, plausibility: str, values=None):
         if plausibility not in ("refuse", "warn"):
             raise InvalidDescription(
                 f"plausibility='{plausibility}': expected 'refuse' or 'warn'"
@@ -68,6 +68,7 @@ class _Checker:
         self.lenient = plausibility == "warn"
         self.problems: list[Problem] = []
         self.checked = Checked()
+        self.param_values = _parameter_values(doc, values)
 
     # -- reporting
     def where(self, el, attr: str | None = None, name: str | None = None) -> str:
@@ -195,6 +196,12 @@ class _Checker:
             ref = _REFERENCE.match(text.strip()) if numeric else None
             if ref is not None:
                 self.checked.references.append((local, klocal, ref.group(1)))
+                value = self.param_values.get(ref.group(1))
+                if value is not None and attr.kind in ("float", "int"):
+                    # a referenced value passes the same checks as the literal would
+                    shown = f"{{{ref.group(1)}}} = {value!r}"
+                    if self.ranges(el, klocal, attr, shown, value):
+                        values[klocal] = value
                 continue
             if numeric and attr.kind == "vec3" and "{" in text:
                 parts = text.split()
@@ -313,14 +320,35 @@ def _ctxname(ctx: str) -> str:
     return f"pinflex:{ctx}"
 
 
+def _parameter_values(doc: XmlDocument, values) -> dict[str, float]:
+    """``{name: value}`` of the document's parameters (overridden by ``values``), for the
+    checks of the attributes that reference them; unreadable values are left to the
+    parameter's own checks."""
+    out: dict[str, float] = {}
+    for el in doc.root.iter(_NS + "parameter"):
+        name, text = el.get("name"), el.get("value")
+        if name is None or text is None:
+            continue
+        try:
+            out[name] = parse_number(text)
+        except ValueError:
+            continue
+    for name, value in (values or {}).items():
+        if name in out:
+            out[name] = float(value)
+    return out
+
+
 def check_annotations(doc: XmlDocument, *, plausibility: str = "refuse",
-                      raise_now: bool = True) -> tuple[Checked, list[Problem]]:
+                      raise_now: bool = True, values=None) -> tuple[Checked, list[Problem]]:
     """Check every pinflex element and attribute of a document against :data:`SCHEMA`.
 
     Args:
         doc: The parsed document (an annotated URDF or an overlay file).
         plausibility: 'refuse' non-physical values (default) or only 'warn' about them.
         raise_now: Raise one error listing every problem (default), else return them.
+        values: Parameter values overriding the file's (``values=`` / ``--set``): an
+            attribute that references a parameter is checked with its value, as a literal.
 
     Returns:
         ``(checked, problems)``: facts for :func:`check_physical`, and the problems.
@@ -328,7 +356,7 @@ def check_annotations(doc: XmlDocument, *, plausibility: str = "refuse",
     Raises:
         UnknownElement, UnknownAttribute, InvalidAttribute, ImplausibleValue: see the module.
     """
-    checker = _Checker(doc, plausibility)
+    checker = _Checker(doc, plausibility, values)
     checked = checker.run()
     if raise_now:
         raise_problems(doc.source, checker.problems, " in the pinflex annotations")
@@ -346,6 +374,8 @@ def check_urdf(doc: XmlDocument, flexible_links: set[str], *, upstream: bool = F
         upstream: The file is an upstream URDF used through an overlay: a zero mass with a
             non-zero inertia warns instead of being refused.
         raise_now: Raise one error listing every problem (default), else return them.
+        values: Parameter values overriding the file's (``values=`` / ``--set``): an
+            attribute that references a parameter is checked with its value, as a literal.
 
     Returns:
         The problems (empty when ``raise_now`` and nothing was wrong).

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from pinflex.exceptions import (
@@ -44,6 +45,9 @@ class Parameter:
         upper: Upper bound (``inf`` when absent).
         design: Whether it is a design variable.
         used_in: The attributes that reference it, e.g. ``("flexible link 'l1' diameter",)``.
+        unit: Its unit, from the attributes that use it (``m`` for a diameter, ``Pa`` for
+            E, ``kg/m^3`` for a density, ``kg`` for a mass, ``N m/rad`` or ``N/m`` for a
+            joint stiffness); ``""`` when it is unused or dimensionless.
     """
 
     name: str
@@ -52,6 +56,7 @@ class Parameter:
     upper: float = math.inf
     design: bool = False
     used_in: tuple[str, ...] = ()
+    unit: str = ""
 
 
 def reference(text: str | None) -> str | None:
@@ -121,11 +126,16 @@ def parse_parameters(root_el: ET.Element, ns: str, overrides: dict[str, float] |
 class Resolver:
     """Reads numeric attributes, resolving ``{name}`` references and recording their use."""
 
-    def __init__(self, params: dict[str, Parameter]):
+    def __init__(self, params: dict[str, Parameter],
+                 unit_of: Callable[[ET.Element, str], str] | None = None):
+        """``unit_of(element, attribute)`` gives an attribute's unit (the schema's), which a
+        parameter referenced there takes."""
         self.params = params
+        self.unit_of = unit_of or (lambda el, key: "")
         self.uses: dict[str, list[str]] = {name: [] for name in params}
+        self.units: dict[str, dict[str, str]] = {name: {} for name in params}
 
-    def lookup(self, name: str, what: str, *, design_ok: bool) -> Parameter:
+    def lookup(self, name: str, what: str, *, design_ok: bool, unit: str = "") -> Parameter:
         """The parameter ``name`` used by ``what``; errors for unknown or misplaced ones."""
         if name not in self.params:
             raise ParameterNotFound(name, self.params, what)
@@ -137,11 +147,18 @@ class Resolver:
                 "joint stiffness; declare it without design=\"true\" to use it here"
             )
         self.uses[name].append(what)
+        if unit:
+            self.units[name].setdefault(unit, what)
         return p
 
     def number(self, el: ET.Element, key: str, what: str, *, required: bool = True,
-               positive: bool = True, design_ok: bool = False) -> float | None:
-        """The value of attribute ``key`` (a number or a reference); None if absent."""
+               positive: bool = True, design_ok: bool = False,
+               unit: str | None = None) -> float | None:
+        """The value of attribute ``key`` (a number or a reference); None if absent.
+
+        ``unit`` is the attribute's unit (default: ``unit_of(el, key)``); a
+        referenced parameter takes it.
+        """
         text = el.get(key)
         where = f"{what} {key}"
         if text is None:
@@ -150,7 +167,8 @@ class Resolver:
             return None
         name = reference(text)
         if name is not None:
-            value = self.lookup(name, where, design_ok=design_ok).value
+            value = self.lookup(name, where, design_ok=design_ok,
+                                unit=self.unit_of(el, key) if unit is None else unit).value
         elif "{" in text or "}" in text:
             raise InvalidDescription(
                 f"{where}='{text}': a reference is written '{{name}}' with a parameter name"
@@ -185,12 +203,26 @@ class Resolver:
                     f"{what} {key}='{text}': a reference is written '{{name}}'"
                 )
             out.append(tok if name is None else
-                       repr(self.lookup(name, f"{what} {key}", design_ok=False).value))
+                       repr(self.lookup(name, f"{what} {key}", design_ok=False,
+                                        unit=self.unit_of(el, key)).value))
         return " ".join(out)
 
     def finish(self) -> dict[str, Parameter]:
-        """The parameters with the attributes that use them."""
-        return {
-            n: Parameter(p.name, p.value, p.lower, p.upper, p.design, tuple(self.uses[n]))
-            for n, p in self.params.items()
-        }
+        """The parameters with the attributes that use them and their unit.
+
+        Raises:
+            InvalidDescription: A parameter is used with two different units (a diameter in
+                m and a modulus in Pa cannot be the same number).
+        """
+        out = {}
+        for n, p in self.params.items():
+            units = self.units[n]
+            if len(units) > 1:
+                uses = "; ".join(f"[{u}] in {w}" for u, w in units.items())
+                raise InvalidDescription(
+                    f"parameter '{n}' is used with different units: {uses}; one parameter has "
+                    "one unit, declare one parameter per quantity")
+            out[n] = Parameter(p.name, p.value, p.lower, p.upper, p.design,
+                               tuple(self.uses[n]), next(iter(units), ""))
+        return out
+

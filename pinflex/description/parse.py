@@ -12,7 +12,7 @@ from pinflex import beam
 from pinflex.description.checks import check_annotations, check_physical, check_urdf
 from pinflex.description.overlay import apply_overlay, resolve_base
 from pinflex.description.params import Resolver, parse_parameters
-from pinflex.description.schema import Checked
+from pinflex.description.schema import Checked, attribute_unit
 from pinflex.description.source import parse_xml, read_text
 from pinflex.description.types import (
     _NS,
@@ -22,6 +22,7 @@ from pinflex.description.types import (
     Joint,
     JointAnnotation,
     PointMass,
+    RigidBody,
     RigidInertia,
     RobotDescription,
 )
@@ -53,7 +54,8 @@ def load(path: str | Path, values: dict[str, float] | None = None, *,
     text = read_text(path, "URDF file")
     doc = parse_xml(text, str(path))
     if doc.root.tag == _NS + "overlay":
-        checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False)
+        checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False,
+                                              values=values)
         raise_problems(str(path), problems, " in the overlay")
         base = resolve_base(doc.root.get("base", ""), path.parent)
         flexible = frozenset(el.get("link", "") for el in doc.root.findall(_NS + "flexible"))
@@ -98,7 +100,8 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
         plausibility: 'refuse' (default) or 'warn' about non-physical values.
     """
     doc = parse_xml(urdf_xml, source)
-    checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False)
+    checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False,
+                                          values=values)
     if doc.root.tag == "robot":
         flexible = {el.get("link", "") for el in doc.root.findall(_NS + "flexible")}
         problems += check_urdf(doc, flexible, raise_now=False)
@@ -112,7 +115,7 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
     if root_el.tag != "robot":
         raise InvalidDescription(f"the URDF's root element is <{root_el.tag}>, expected <robot>")
     params = parse_parameters(root_el, _NS, values)
-    R = Resolver(params)
+    R = Resolver(params, attribute_unit)
     links = tuple(_name(el, "<link>") for el in root_el.findall("link"))
     inertias = {}
     for el in root_el.findall("link"):
@@ -139,6 +142,12 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
         if f.link in flexible:
             raise InvalidDescription(f"link '{f.link}' is declared flexible twice")
         flexible[f.link] = f
+    bodies, notes = _kept_inertias(root_el, flexible, inertias)
+    for el in root_el.findall(_NS + "body"):
+        bodies.append(_parse_body(el, links, R))
+    body_names = [b.name for b in bodies]
+    if len(set(body_names)) != len(body_names):
+        raise InvalidDescription(f"body names must be unique, got {body_names}")
     point_masses = []
     for el in root_el.findall(_NS + "point_mass"):
         point_masses.append(_parse_point_mass(el, links, R))
@@ -175,6 +184,8 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
         joint_annotations=annotations,
         parameters=R.finish(),
         values={k: float(v) for k, v in (values or {}).items() if k in params},
+        bodies=tuple(bodies),
+        inertia_notes=tuple(notes),
     )
     check_physical(desc, checked, source, plausibility=plausibility)
     return desc
@@ -216,6 +227,56 @@ def _origin(el: ET.Element | None, what: str) -> tuple[np.ndarray, np.ndarray]:
     return _vec(el.get("xyz"), "0 0 0", what + " origin xyz"), rpy_matrix(
         _vec(el.get("rpy"), "0 0 0", what + " origin rpy")
     )
+
+
+def _kept_inertias(root_el: ET.Element, flexible: dict, inertias: dict):
+    """Bodies for the URDF inertia each beam link keeps, and one note per link.
+
+    The beam's own inertia is taken at the file's nominal design (parameter values as
+    written, before ``values=`` / ``--set``), so the kept part is the same for every design.
+    """
+    from pinflex.description.link_inertia import kept_link_inertia
+
+    nominal = {n: p.value for n, p in parse_parameters(root_el, _NS, None).items()}
+    bodies, notes = [], []
+    for link, f in flexible.items():
+        urdf = inertias.get(link)
+        if urdf is None or urdf.mass <= 0.0:
+            continue
+        props = beam_properties(f.inputs, nominal.__getitem__) if f.inputs is not None else {
+            "rhoA": f.rhoA, "rhoIp": f.rhoIp}
+        body, note = kept_link_inertia(link, f.inertia, urdf, f.tip, f.rotation,
+                                       float(props["rhoA"]), float(props["rhoIp"]))
+        notes.append(note)
+        if body is not None:
+            mass, com, inertia = body
+            bodies.append(RigidBody(f"{link}.urdf", link, com, mass, inertia,
+                                    "urdf" if f.inertia == "keep" else "urdf excess"))
+    return bodies, notes
+
+
+def _parse_body(el: ET.Element, links: tuple[str, ...], R: Resolver) -> RigidBody:
+    name = el.get("name") or ""
+    if not name:
+        raise InvalidDescription("<pinflex:body> needs a 'name'")
+    link = el.get("link") or ""
+    if link not in links:
+        raise LinkNotFound(link, links)
+    what = f"body '{name}'"
+    xyz = _vec(R.text(el, "xyz", what), "0 0 0", what + " xyz")
+    mass = R.number(el, "mass", what)
+    g = {k: R.number(el, k, what, required=False, positive=False) or 0.0
+         for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    inertia = np.array([[g["ixx"], g["ixy"], g["ixz"]], [g["ixy"], g["iyy"], g["iyz"]],
+                        [g["ixz"], g["iyz"], g["izz"]]])
+    from pinflex.description.link_inertia import second_moments
+
+    if np.linalg.eigvalsh(second_moments(inertia)).min() < -1e-9 * max(
+            float(np.abs(inertia).max()), 1e-300):
+        raise InvalidBeamProperty(f"{what}: the rotational inertia is not a rigid body's "
+                                  "(principal moments must be >= 0, each at most the sum of "
+                                  "the other two)")
+    return RigidBody(name, link, xyz, float(mass or 0.0), inertia, "body")
 
 
 def _parse_inertial(link: str, el: ET.Element) -> RigidInertia:
@@ -271,7 +332,7 @@ def _parse_joint(el: ET.Element, links: tuple[str, ...]) -> Joint:
 
 def _float_attr(el: ET.Element, key: str, what: str, *, required: bool = True,
                 R: Resolver | None = None, design_ok: bool = False) -> float | None:
-    return (R or Resolver({})).number(el, key, what, required=required, design_ok=design_ok)
+    return (R or Resolver({}, attribute_unit)).number(el, key, what, required=required, design_ok=design_ok)
 
 
 def _entry(el: ET.Element, key: str, what: str, R: Resolver, *, required: bool = True):
@@ -408,6 +469,7 @@ def _parse_flexible(el, links, joints, child_joints, parent_joint, R: Resolver) 
     section = beam.Section(A=props["A"], Iy=props["Iy"], Iz=props["Iz"], J=props["J"])
     G = props["GJ"] / props["J"]
     return FlexibleLink(
+        inertia=el.get("inertia", "keep-excess"),
         link=link,
         elements=elements,
         tip=tip,
@@ -471,10 +533,20 @@ def _parse_joint_annotation(el: ET.Element, joints: dict[str, Joint],
     if locked_text not in ("1", "true", "yes", "0", "false", "no"):
         raise InvalidDescription(f"{what}: locked='{el.get('locked')}' must be true or false")
     locked = locked_text in ("1", "true", "yes")
-    stiffness = R.number(el, "stiffness", what, required=False, design_ok=True)
+    prismatic = joints[name].type == "prismatic"
+    unit = "N/m" if prismatic else "N m/rad"
+    stiffness = R.number(el, "stiffness", what, required=False, design_ok=True, unit=unit)
     stiffness_ref = R.ref(el, "stiffness")
     if locked and stiffness is not None:
         raise InvalidDescription(
             f"{what}: give either stiffness=\"...\" (a spring) or locked=\"true\", not both"
         )
-    return JointAnnotation(name, stiffness, locked, stiffness_ref)
+    damping = R.number(el, "damping", what, required=False, positive=False,
+                       unit="N s/m" if prismatic else "N m s/rad")
+    armature = R.number(el, "armature", what, required=False, positive=False,
+                        unit="kg" if prismatic else "kg m^2")
+    for key, value in (("damping", damping), ("armature", armature)):
+        if value is not None and not (np.isfinite(value) and value >= 0.0):
+            raise InvalidBeamProperty(f"{what}: {key} = {value} must be a finite number >= 0")
+    return JointAnnotation(name, stiffness, locked, stiffness_ref, damping or 0.0,
+                           armature or 0.0)

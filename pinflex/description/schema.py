@@ -185,9 +185,9 @@ def _section_rule(v: dict, report: Report, ctx: _Context) -> None:
         report("wall", "give inner_diameter or wall, not both")
         return
     if shape == "hollow_circle" and _num(v.get("wall")) and not (
-        0.0 < v["wall"] < v["outer_diameter"] / 2.0
+        0.0 < v["wall"] <= v["outer_diameter"] / 2.0  # half: a solid rod (inner diameter 0)
     ):
-        report("wall", f"wall = {v['wall']:g} m must be above 0 and below half the "
+        report("wall", f"wall = {v['wall']:g} m must be above 0 and at most half the "
                f"outer_diameter ({v['outer_diameter'] / 2.0:g} m)")
         return
     if shape == "hollow_circle" and _num(v.get("inner_diameter")):
@@ -248,6 +248,24 @@ def _parameter_rule(v: dict, report: Report, ctx: _Context) -> None:
             report(missing[0], "a design parameter needs finite lower and upper bounds")
 
 
+def _body_rule(v: dict, report: Report, ctx: _Context) -> None:
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    if not all(k not in ctx.attrib or _num(v.get(k)) for k in keys):
+        return
+    import numpy as np
+
+    g = {k: float(v.get(k, 0.0)) for k in keys}
+    inertia = np.array([[g["ixx"], g["ixy"], g["ixz"]], [g["ixy"], g["iyy"], g["iyz"]],
+                        [g["ixz"], g["iyz"], g["izz"]]])
+    moments = np.linalg.eigvalsh(0.5 * np.trace(inertia) * np.eye(3) - inertia)
+    scale = max(float(np.max(np.abs(inertia))), 1e-300)
+    if moments.min() < -1e-9 * scale:
+        p = np.sort(np.linalg.eigvalsh(inertia))
+        report("ixx", f"the rotational inertia is not a rigid body's: principal moments "
+               f"{p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g} kg m^2 must be >= 0 and each at most the "
+               "sum of the other two", physical=True)
+
+
 def _joint_rule(v: dict, report: Report, ctx: _Context) -> None:
     if v.get("locked") and "stiffness" in ctx.attrib:
         report("stiffness", "give either stiffness=\"...\" (a spring) or locked=\"true\", "
@@ -276,6 +294,9 @@ SCHEMA: dict[str, Element] = {
                              doc="number of equal beam elements"),
             "tip": Attr("vec3", unit="m", doc="beam end in the link frame"),
             "normal": Attr("vec3", doc="beam z axis in the link frame"),
+            "inertia": Attr("choice", choices=("keep-excess", "keep", "beam-only"),
+                            doc="what the beam keeps of the URDF link's inertia: the part "
+                            "beyond the beam's own (default), all of it, or none"),
         },
         doc="a link modelled as a straight finite-element beam",
     ),
@@ -359,11 +380,33 @@ SCHEMA: dict[str, Element] = {
             "name": Attr("text", required=True, doc="a moving URDF joint"),
             "stiffness": Attr(gt=0.0, le=1e15, unit="N m/rad or N/m", reference=True,
                               doc="joint spring (revolute: N m/rad, prismatic: N/m)"),
+            "damping": Attr(ge=0.0, le=1e15, unit="N m s/rad or N s/m", reference=True,
+                            doc="joint damper on the same relative motion (a servo's D gain)"),
+            "armature": Attr(ge=0.0, le=1e9, plausible=(0.0, 1e3), unit="kg m^2 or kg",
+                             reference=True, why="armature = rotor inertia x gear ratio^2",
+                             doc="reflected rotor inertia, rotor inertia x gear ratio^2 (as "
+                             "Pinocchio's model.armature and MuJoCo's armature)"),
             "locked": Attr("bool", doc="the joint is held fixed"),
         },
         rules=(_joint_rule,),
         doc="joint condition: a spring or a lock (the default; joints='free' or 'locked' "
         "override it)",
+    ),
+    "body": Element(
+        parents=("robot", "overlay"),
+        attrs={
+            "name": Attr("name", required=True, doc="unique name"),
+            "link": Attr("text", required=True, doc="link carrying the body"),
+            "xyz": Attr("vec3", unit="m", doc="centre of mass in the link frame"),
+            "mass": Attr(required=True, gt=0.0, le=1e9, plausible=(0.0, 1e4), unit="kg",
+                         why="mass is in kg", doc="mass"),
+            **{k: Attr(ge=0.0 if k in ("ixx", "iyy", "izz") else None, le=1e9, unit="kg m^2",
+                       doc=f"{k} of the rotational inertia about the centre of mass, link axes")
+               for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
+        },
+        rules=(_body_rule,),
+        doc="a rigid body with mass and rotational inertia on a link (a motor, a flange, a "
+        "tool); on a beam it moves with the section at its centre of mass",
     ),
     "coordinates": Element(
         parents=("robot", "overlay"),
@@ -401,3 +444,11 @@ class _Context:
 
 def _num(x) -> TypeGuard[float]:
     return isinstance(x, float) and math.isfinite(x)
+
+
+def attribute_unit(el, key: str) -> str:
+    """The unit of attribute ``key`` of a pinflex element ``el`` (``""`` if none)."""
+    tag = el.tag.rsplit("}", 1)[-1]
+    element = SCHEMA.get(tag)
+    attr = None if element is None else element.attrs.get(key)
+    return "" if attr is None else attr.unit

@@ -89,6 +89,9 @@ class FlexibleLink:
         section: Cross-section properties.
         inputs: What the properties are computed from (section dimensions, material), with
             design parameters by name (see :mod:`pinflex.sections`).
+        inertia: What the beam keeps of the URDF link's inertia: ``'keep-excess'`` (the part
+            beyond the beam's own, default), ``'keep'`` (all) or ``'beam-only'`` (none); see
+            :mod:`pinflex.description.link_inertia`.
     """
 
     link: str
@@ -101,6 +104,7 @@ class FlexibleLink:
     rhoIp: float
     section: beam.Section
     inputs: PropertyInputs | None = None
+    inertia: str = "keep-excess"
 
     @property
     def length_m(self) -> float:
@@ -146,6 +150,38 @@ class PointMass:
 
 
 @dataclass(frozen=True)
+class RigidBody:
+    """A rigid body with mass and rotational inertia carried by a link.
+
+    From a ``<pinflex:body>`` element, or the URDF inertia a beam link keeps (see
+    :mod:`pinflex.description.link_inertia`). On a beam it moves with the cross-section at the
+    axial station of its centre of mass (with a rigid offset from the axis).
+
+    Attributes:
+        name: Unique name (``link.urdf`` for a kept URDF inertia).
+        link: Link carrying it.
+        com: Centre of mass in the link frame [m], (3,).
+        mass: Mass [kg].
+        inertia: Rotational inertia about the centre of mass in link axes [kg m²], (3, 3).
+        source: ``'body'`` (a ``<pinflex:body>``), ``'urdf'`` or ``'urdf excess'``.
+    """
+
+    name: str
+    link: str
+    com: np.ndarray
+    mass: float
+    inertia: np.ndarray
+    source: str = "body"
+
+    def spatial_matrix(self) -> np.ndarray:
+        """6×6 spatial inertia at the centre of mass, ordering (linear, angular)."""
+        out = np.zeros((6, 6))
+        out[:3, :3] = self.mass * np.eye(3)
+        out[3:, 3:] = self.inertia
+        return out
+
+
+@dataclass(frozen=True)
 class JointAnnotation:
     """The mechanical condition a ``<pinflex:joint>`` element gives a moving joint.
 
@@ -156,12 +192,17 @@ class JointAnnotation:
         locked: Whether the joint is held rigidly (the child's root follows the parent's
             deformed attachment).
         stiffness_ref: The design parameter the stiffness references, else None.
+        damping: Damper on the same relative motion [N m s/rad or N s/m] (0: none).
+        armature: Reflected rotor inertia, rotor inertia × gear ratio² [kg m² or kg], added
+            to M on the joint's relative motion (as Pinocchio's ``model.armature``).
     """
 
     name: str
     stiffness: float | None = None
     locked: bool = False
     stiffness_ref: str | None = None
+    damping: float = 0.0
+    armature: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -183,6 +224,9 @@ class RobotDescription:
             joint conditions, unless built with ``joints="free"`` or ``"locked"``).
         parameters: ``<pinflex:parameter>`` elements by name, with their current values.
         values: The parameter overrides the description was parsed with.
+        bodies: Rigid bodies on links: ``<pinflex:body>`` elements and the URDF inertia beam
+            links keep (:mod:`pinflex.description.link_inertia`).
+        inertia_notes: One line per flexible link saying what it kept of its URDF inertia.
     """
 
     name: str
@@ -200,6 +244,8 @@ class RobotDescription:
     joint_annotations: dict[str, JointAnnotation] = field(default_factory=dict)
     parameters: dict[str, Parameter] = field(default_factory=dict)
     values: dict[str, float] = field(default_factory=dict)
+    bodies: tuple[RigidBody, ...] = ()
+    inertia_notes: tuple[str, ...] = ()
 
     def with_values(self, values: dict[str, float]) -> RobotDescription:
         """The same description with parameter values overridden (re-read from its text).

@@ -87,6 +87,22 @@ def build_carriers(model, y: np.ndarray) -> tuple[list[Carriers], list[Carriers]
         X = xmap(c)
         points.append(Carriers(link, c, X, np.zeros((c.shape[0], 3, nx)), X, m,
                                -np.ones(m.size, dtype=int)))
+    # rigid bodies (<pinflex:body>, the URDF inertia a beam link keeps): seven signed points
+    # each; on a rigid link they ride with it, on a beam with the section at their centre
+    at_beam = {b.name: b for b in model.plan.bodies}
+    for body in desc.bodies:
+        c, m = _equivalent_points(body.mass, np.asarray(body.com, float),
+                                  np.asarray(body.inertia, float))
+        X = xmap(c)
+        if body.name not in at_beam:
+            points.append(Carriers(body.link, c, X, np.zeros((c.shape[0], 3, nx)), X, m,
+                                   -np.ones(m.size, dtype=int)))
+            continue
+        att = at_beam[body.name].attach
+        to_p = xmap(c - np.asarray(body.com, float))  # from the centre's twist
+        C = np.zeros((c.shape[0], 3, nx)) if att.const is None else to_p @ att.const
+        D = None if att.lin is None else to_p @ att.lin
+        points.append(Carriers(body.link, c, X, C, D, m, -np.ones(m.size, dtype=int)))
     for pm in model.plan.point_masses:
         name, link, xyz, att = pm.name, pm.link, pm.xyz, pm.attach
         d = model.plan.design.mass_index.get(name, -1)

@@ -151,6 +151,8 @@ def linear_pose(dyn, q, inputs, outputs, *, damping: Damping | None = None,
         C = np.zeros_like(M)
     if C0 is not None:
         C = C + C0
+    if joints != "locked":  # joint dampers (zero on the motors-held motions)
+        C = C + dyn.joint_damping(q)
     return LinearPose(M, K, C, B, Y, joints)
 
 

@@ -120,6 +120,12 @@ class ErlsDynamics:
             j.attach.lin is not None and j.parent != model.plan.root and j.user_col >= 0
             for j in model.plan.joints)
         conds = getattr(model, "joint_conditions", ())
+        #: joint drives ``(user column, armature, damping)`` on the physical relative motion
+        #: ``r = G z`` (pinflex.erls.joints): ``M += a GᵀG``, the joints' ``C = Σ c GᵀG``
+        self._drives = [(model.joint_index(c.name), float(getattr(c, "armature", 0.0) or 0.0),
+                         float(getattr(c, "damping", 0.0) or 0.0)) for c in conds
+                        if c.kind != "locked" and (getattr(c, "armature", 0.0)
+                                                   or getattr(c, "damping", 0.0))]
         #: locked joints ``(name, user column)``: their physical angle is held constant (the
         #: prescribed drive checks that the trajectory holds them; the torque drive refuses)
         self.locked = tuple((c.name, model.joint_index(c.name)) for c in conds
@@ -241,7 +247,25 @@ class ErlsDynamics:
             M += IWt @ W.reshape(n3, nd)
             Ck[:, :, :nx] += IWt @ Gk.reshape(nv, n3, nx)
             Ck[:, :, nx:] += IWt @ Jdang.reshape(nv, n3, nv) + W.reshape(n3, nd).T @ gyro
+        if any(a for _, a, _ in self._drives):
+            G = self.model.relative_motion_rows(q)
+            for col, a, _ in self._drives:
+                M += a * np.outer(G[col], G[col])
         return M, Ck, self._stiffness(e), F
+
+    def joint_damping(self, q) -> np.ndarray:
+        """The joint dampers' damping matrix ``Σ c GᵀG`` (ndof, ndof) at ``q`` [N m s/rad].
+
+        ``G`` is the joints' physical relative motion over ``[x; q_all]``
+        (:meth:`pinflex.FlexibleModel.relative_motion_rows`), so a damper between a flexible
+        parent and its child damps that motion; zero on the motors-held (locked) motions.
+        """
+        C = np.zeros((self.ndof, self.ndof))
+        if any(c for _, _, c in self._drives):
+            G = self.model.relative_motion_rows(np.asarray(q, dtype=float))
+            for col, _, c in self._drives:
+                C += c * np.outer(G[col], G[col])
+        return C
 
     def terms(self, q, qd) -> EomTerms:
         """``M, C, K, F`` of eq. (1) at joint coordinates ``q`` and velocities ``q̇`` (user).

@@ -187,6 +187,7 @@ def simulate_torque(
         C = np.tensordot(zd[nx:], Ck, axes=(0, 0))
         if damping.kind == "rayleigh":  # the deformation's, motors held (linalg.held_rayleigh)
             C += held_rayleigh(M, K, G, nx, damping.alpha, damping.beta)
+        C += dyn.joint_damping(z[nx:])  # joint dampers (zero without them)
         f = F + G.T @ applied(t, z, zd, G, None) + K @ z_ref
         return M, C, K, f
 

@@ -1,7 +1,7 @@
 """Assembly of the nodal-coordinate pencil ``M(q, y)``, ``K(q, y)`` on any algebra.
 
 The elastic root twist of every link follows the unique-ERLS rule of each joint
-(:func:`pinflex.erls.terms.joint_step`); beams, rigid inertias and point masses add their
+(:func:`pinflex.erls.terms.joint_step`); beams, rigid inertias, point masses and rigid bodies add their
 kinetic energy, beams their strain energy, and the joint conditions
 (:mod:`pinflex.erls.joints`) map the result to the modal coordinates.
 """
@@ -54,6 +54,14 @@ def assemble(model, terms: PoseTerms, alg: Algebra):
         else:
             value = model.point_mass_values[name]
             M = value * m if M is None else M + value * m
+    for body in model.plan.bodies:  # rigid bodies on beams: all six twist rows
+        jl = terms.jac[body.link]
+        tau = twist_at(alg, body.attach, twist[body.link])
+        g = np.concatenate(
+            [zeros_like(jl, nx) if tau is None else tau, translate_twist(body.xyz) @ jl],
+            axis=-1)
+        m = alg.mm(np.swapaxes(g, -1, -2), body.inertia @ g)
+        M = m if M is None else M + m
     if M is None:
         M = np.zeros(shape_b + (nd, nd))
     Kfull = np.zeros(M.shape)

@@ -31,7 +31,8 @@ def effective_inertias(arm) -> dict[str, pin.Inertia]:
 
 
 def effective_model(arm, y=None, *, point_masses: bool = True) -> pin.Model:
-    """Copy of ``arm.model`` with beam inertias on flexible links (and point masses).
+    """Copy of ``arm.model`` with beam inertias on flexible links, its bodies (the URDF
+    inertia beam links keep, ``<pinflex:body>``) and point masses.
 
     Args:
         arm: The flexible model.
@@ -57,6 +58,8 @@ def effective_model(arm, y=None, *, point_masses: bool = True) -> pin.Model:
         if urdf is not None and urdf.mass > 0.0:
             add(link, pin.Inertia(urdf.mass, urdf.com, urdf.inertia), -1.0)
         add(link, inertia)
+    for body in desc.bodies:  # kept URDF inertias and <pinflex:body> elements
+        add(body.link, pin.Inertia(body.mass, np.asarray(body.com), np.asarray(body.inertia)))
     if point_masses:
         values = dict(arm.point_mass_values)
         yv = arm.check_y(y)

@@ -57,15 +57,24 @@ class JointCondition:
         name: Joint name.
         kind: 'free', 'spring' or 'locked'.
         stiffness: Spring stiffness [N m/rad or N/m]; 0 when free, ``inf`` when locked.
+        damping: Damper on the joint's physical relative motion [N m s/rad or N s/m].
+        armature: Reflected rotor inertia on the same motion [kg m² or kg].
     """
 
     name: str
     kind: str
     stiffness: float
+    damping: float = 0.0
+    armature: float = 0.0
 
     def label(self) -> str:
-        """Short text: ``free``, ``locked`` or ``k=1.2e+04``."""
-        return self.kind if self.kind != "spring" else f"k={self.stiffness:.3g}"
+        """Short text: ``free``, ``locked`` or ``k=1.2e+04``, with ``c=`` and ``a=`` if set."""
+        text = self.kind if self.kind != "spring" else f"k={self.stiffness:.3g}"
+        if self.damping and self.kind != "locked":
+            text += f" c={self.damping:.3g}"
+        if self.armature and self.kind != "locked":
+            text += f" a={self.armature:.3g}"
+        return text
 
 
 def resolve(model, joints) -> tuple[JointCondition, ...]:
@@ -75,27 +84,31 @@ def resolve(model, joints) -> tuple[JointCondition, ...]:
         model: The model (its joint names and description).
         joints: 'annotated' or None (the default: the file's ``<pinflex:joint>``
             elements; unannotated joints are free), 'free', 'locked', or a mapping
-            ``{joint: 'free' | 'locked' | stiffness}`` (unnamed joints are free).
+            ``{joint: 'free' | 'locked' | stiffness | JointSpec}`` (unnamed joints are free).
+
+    The holding condition (free, spring, lock) and the damper come from the switch; the
+    armature is the drive's hardware and stays the file's under every switch (a
+    :class:`~pinflex.native.spec.JointSpec` in a mapping may give its own).
     """
     names = model.joint_names
+    notes = model.description.joint_annotations
+    file_armature = {n: a.armature for n, a in notes.items()}
     if joints is None:
         joints = "annotated"
     if isinstance(joints, str):
         if joints not in JOINT_SWITCHES:
             raise ConfigurationError(
                 f"joints='{joints}': expected one of {', '.join(JOINT_SWITCHES)} or a mapping "
-                "{joint: 'free' | 'locked' | stiffness}"
+                "{joint: 'free' | 'locked' | stiffness | JointSpec}"
             )
-        if joints == "free":
-            return tuple(JointCondition(n, "free", 0.0) for n in names)
-        if joints == "locked":
-            return tuple(JointCondition(n, "locked", np.inf) for n in names)
+        if joints in ("free", "locked"):
+            k = 0.0 if joints == "free" else np.inf
+            return tuple(JointCondition(n, joints, k, 0.0, file_armature.get(n, 0.0))
+                         for n in names)
         spec: dict = {}
-        for name, a in model.description.joint_annotations.items():
-            if a.locked:
-                spec[name] = "locked"
-            elif a.stiffness is not None:
-                spec[name] = a.stiffness
+        for name, a in notes.items():
+            spec[name] = _Held("locked" if a.locked else "spring" if a.stiffness is not None
+                               else "free", a.stiffness, a.damping, a.armature)
     elif isinstance(joints, Mapping):
         spec = dict(joints)
     else:
@@ -105,24 +118,46 @@ def resolve(model, joints) -> tuple[JointCondition, ...]:
     for name in spec:
         if name not in names:
             raise JointNotFound(name, names)
-    out = []
-    for n in names:
-        v = spec.get(n, "free")
-        if isinstance(v, str):
-            if v not in ("free", "locked"):
-                raise ConfigurationError(
-                    f"joint '{n}': condition '{v}' must be 'free', 'locked' or a stiffness"
-                )
-            out.append(JointCondition(n, v, 0.0 if v == "free" else np.inf))
-            continue
-        k = float(v)
-        if not np.isfinite(k) or k <= 0.0:
-            raise InvalidBeamProperty(
-                f"joint '{n}': stiffness = {v!r} must be a positive finite number "
-                "[N m/rad or N/m]; use 'free' or 'locked' for the limits"
+    return tuple(_condition(n, spec.get(n, "free"), file_armature.get(n, 0.0)) for n in names)
+
+
+@dataclass(frozen=True)
+class _Held:
+    kind: str
+    stiffness: float | None
+    damping: float
+    armature: float
+
+
+def _condition(n: str, v, armature: float) -> JointCondition:
+    """One joint's condition from a mapping value (or a parsed annotation)."""
+    damping = 0.0
+    if isinstance(v, _Held):
+        kind, k, damping, armature = v.kind, v.stiffness, v.damping, v.armature
+        v = kind if kind != "spring" else k
+    elif hasattr(v, "stiffness") and hasattr(v, "armature"):  # a pinflex.JointSpec
+        damping = float(v.damping)
+        armature = armature if v.armature is None else float(v.armature)
+        for what, x in (("damping", damping), ("armature", armature)):
+            if not (np.isfinite(x) and x >= 0.0):
+                raise InvalidBeamProperty(f"joint '{n}': {what} = {x!r} must be a finite "
+                                          "number >= 0")
+        v = "locked" if v.locked else ("free" if v.stiffness is None else v.stiffness)
+    if isinstance(v, str):
+        if v not in ("free", "locked"):
+            raise ConfigurationError(
+                f"joint '{n}': condition '{v}' must be 'free', 'locked', a stiffness or a "
+                "pinflex.JointSpec"
             )
-        out.append(JointCondition(n, "spring", k))
-    return tuple(out)
+        return JointCondition(n, v, 0.0 if v == "free" else np.inf,
+                              0.0 if v == "locked" else damping, armature)
+    k = float(v)
+    if not np.isfinite(k) or k <= 0.0:
+        raise InvalidBeamProperty(
+            f"joint '{n}': stiffness = {v!r} must be a positive finite number "
+            "[N m/rad or N/m]; use 'free' or 'locked' for the limits"
+        )
+    return JointCondition(n, "spring", k, damping, armature)
 
 
 @dataclass(frozen=True)
@@ -143,6 +178,10 @@ class JointLayout:
         spring_joints: ``(JointPlan, stiffness)`` of every spring-held joint.
         spring_refs: ``{joint: parameter}`` of springs whose stiffness is a parameter.
         locked_joints: ``JointPlan`` of every locked joint.
+        armatures: ``(JointPlan, armature)`` of every joint that is not locked and has a
+            reflected rotor inertia (added to M on its relative motion).
+        dampers: ``(JointPlan, damping)`` of every joint that is not locked and has a damper
+            (the joint part of the damping matrix, :func:`damping_matrices`).
         lock_T0: Constant part of ``T`` (nx + nv, ndof) when a joint is locked, else None.
         lock_inv: ``C_LL⁻¹`` of the locked joints, else None.
         lock_rows: Rows of ``T`` of the locked joints' coordinates, else None.
@@ -166,6 +205,8 @@ class JointLayout:
     lock_rows: np.ndarray | None
     plain: bool
     modal_Winv: np.ndarray | None
+    armatures: tuple = ()
+    dampers: tuple = ()
 
 
 def _frozen(a):
@@ -212,6 +253,10 @@ def layout(model, plan, joints) -> JointLayout:
         (by_col[i], c.stiffness) for i, c in enumerate(conds) if c.kind == "spring"
     )
     locked_joints = tuple(by_col[i] for i in locked)
+    armatures = tuple((by_col[i], c.armature) for i, c in enumerate(conds)
+                      if c.kind != "locked" and c.armature > 0.0)
+    dampers = tuple((by_col[i], c.damping) for i, c in enumerate(conds)
+                    if c.kind != "locked" and c.damping > 0.0)
     _check_spring_scale(plan, spring_joints)
     C = model.coord_map
     T0 = inv = rows = None
@@ -224,7 +269,7 @@ def layout(model, plan, joints) -> JointLayout:
         T0[nx + np.array(kept, dtype=int), nx + np.arange(len(kept))] = 1.0
         T0[np.ix_(nx + np.array(locked), nx + np.arange(len(kept)))] = -inv @ CLK
         rows = nx + np.array(locked, dtype=int)
-    plain = not spring_joints and not locked
+    plain = not spring_joints and not locked and not armatures
     # Free joints carry no stiffness in *relative* joint values; with absolute user
     # coordinates a spring on one joint couples its neighbours' user coordinates. The modal
     # reduction therefore works in [x; r_kept] with r_kept = W q_kept (x = 0 in the locks).
@@ -245,6 +290,7 @@ def layout(model, plan, joints) -> JointLayout:
         spring_joints=spring_joints, spring_refs=MappingProxyType(spring_refs),
         locked_joints=locked_joints, lock_T0=_frozen(T0), lock_inv=_frozen(inv),
         lock_rows=_frozen(rows), plain=plain, modal_Winv=_frozen(Winv),
+        armatures=armatures, dampers=dampers,
     )
 
 
@@ -361,6 +407,11 @@ def apply(model, terms, alg, twist, M, Mdesign, K):
     lay = model.plan.conditions
     if lay.plain:
         return M, Mdesign, K
+    if lay.armatures:
+        # the rotor turns with the joint's physical relative motion r = g [x; q]: its reflected
+        # inertia a adds a gᵀg to M, as Pinocchio's model.armature adds a to the joint's own
+        # diagonal when the parent does not deform (there g is the joint's unit row)
+        M = M + sum(a * _unit(model, terms, alg, twist, j) for j, a in lay.armatures)
     if lay.spring_joints:
         gx = parent_rows(model, terms, alg, twist, [j for j, _ in lay.spring_joints])
         for s, (j, k) in enumerate(lay.spring_joints):
@@ -378,6 +429,49 @@ def apply(model, terms, alg, twist, M, Mdesign, K):
             np.zeros((0,) + M.shape)
         )
     return M, Mdesign, K
+
+
+def _unit(model, terms, alg, twist, j) -> np.ndarray:
+    """``gᵀg`` of one joint's physical relative motion ``r = g [x; q_all]``, (b, nd, nd)."""
+    gx = parent_rows(model, terms, alg, twist, [j])
+    g = np.concatenate([-gx, alg.const(model.coord_map[j.user_col][None, :])], axis=-1)
+    return alg.mm(np.swapaxes(g, -1, -2), g)
+
+
+def damping_matrices(model, Q, data=None) -> np.ndarray:
+    """The joint dampers' damping matrix ``C = Σ c gᵀg`` over the modal coordinates.
+
+    ``g`` is each joint's physical relative motion (as for springs), so a damper between a
+    flexible parent and its child damps that motion, not the ERLS coordinate alone. Locked
+    joints have none (their relative motion is zero). Beam damping (Rayleigh, modal) is the
+    dynamics' own; this is the joints' part of the ``C`` every analysis adds.
+
+    Args:
+        model: The flexible model.
+        Q: Joint coordinates, one pose (nv,) or many (n, nv), user convention.
+        data: Workspace (default: this thread's).
+
+    Returns:
+        ``C`` (ndof, ndof) or (n, ndof, ndof) [N m s/rad, N s/m and the coupled units].
+    """
+    from pinflex.erls.terms import BatchAlgebra
+
+    Q = model.check_q(Q)
+    single = Q.ndim == 1
+    Qb = Q[None] if single else Q
+    n = Qb.shape[0]
+    lay = model.plan.conditions
+    out = np.zeros((n, model.ndof, model.ndof))
+    if lay.dampers:
+        terms = model.pose_terms(Qb, data=data)
+        alg = BatchAlgebra(n)
+        twist = model.root_twists(terms, alg)
+        C = sum(c * _unit(model, terms, alg, twist, j) for j, c in lay.dampers)
+        T = transform(model, terms, alg, twist)
+        if T is not None:
+            C = alg.mm(np.swapaxes(T, -1, -2), alg.mm(C, T))
+        out = np.asarray(C)
+    return out[0] if single else out
 
 
 def relative_motion_rows(model, terms, alg, twist) -> np.ndarray:

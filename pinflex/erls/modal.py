@@ -18,7 +18,7 @@ class ModalResult:
 
     Attributes:
         q: Joint coordinates (user convention) [rad or m], (nv,).
-        y: Design values [kg], (ny,).
+        y: Design values, (ny,), each in its variable's unit (``design_units``).
         ndof: Number of modal coordinates nx + (joints not locked).
         rigid_modes: Number of rigid (zero-frequency) modes (the free joints).
         eigvals: Non-rigid eigenvalues λ = ω² ascending [rad²/s²], (k,).
@@ -27,6 +27,8 @@ class ModalResult:
         node_positions: World positions of beam nodes per flexible link [m], (N+1, 3) each.
         node_motion: Per flexible link, the world-axes nodal translation and rotation of each
             mode, (k, N+1, 6); ``node_elastic`` the elastic part only (rigid ERLS motion removed).
+        design_names: Names of the design variables of ``y``.
+        design_units: Their units (``kg``, ``m``, ``Pa``, ...).
     """
 
     q: np.ndarray
@@ -38,6 +40,8 @@ class ModalResult:
     node_positions: dict[str, np.ndarray]
     node_motion: dict[str, np.ndarray]
     node_elastic: dict[str, np.ndarray]
+    design_names: tuple[str, ...] = ()
+    design_units: tuple[str, ...] = ()
 
     @property
     def omega_rad_s(self) -> np.ndarray:
@@ -60,7 +64,12 @@ class ModalResult:
             f"  q = {vec(self.q)}",
         ]
         if np.size(self.y):
-            lines.append(f"  y = {vec(self.y, ' kg')}")
+            if len(self.design_names) == np.size(self.y):
+                lines.append("  y: " + ", ".join(
+                    f"{n} = {v:.4g} {u}".rstrip() for n, v, u in
+                    zip(self.design_names, np.ravel(self.y), self.design_units)))
+            else:
+                lines.append(f"  y = {vec(self.y)}")
         lines.append(f"  {'mode':>4}  {'f [Hz]':>12}  {'omega [rad/s]':>14}")
         shown = self.eigvals.size if self.eigvals.size <= 12 else 10
         for k in range(shown):
@@ -71,6 +80,12 @@ class ModalResult:
                 "see .freq_hz"
             )
         return "\n".join(lines)
+
+
+def design_labels(model) -> dict:
+    """``design_names`` and ``design_units`` of a :class:`ModalResult` of ``model``."""
+    return {"design_names": tuple(d.name for d in model.design),
+            "design_units": tuple(d.unit for d in model.design)}
 
 
 def reduced(model, M: np.ndarray, K: np.ndarray):
@@ -277,6 +292,7 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
         return ModalResult(
             q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
             node_positions=positions, node_motion=motion, node_elastic=elastic,
+            **design_labels(model),
         )
     shapes = np.concatenate([eigensolve.to_nodal(model, twist, sw, data), sx], axis=1)
     return _nodal_result(model, q, y, lam, shapes, terms, data)
@@ -293,6 +309,7 @@ def _nodal_result(model, q, y, lam, shapes, terms, data) -> ModalResult:
     return ModalResult(
         q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
+        **design_labels(model),
     )
 
 
@@ -424,6 +441,7 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     return ModalResult(
         q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
+        **design_labels(model),
     )
 
 

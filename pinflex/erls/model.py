@@ -265,7 +265,7 @@ class FlexibleModel:
             for p in description.point_masses
             if p.design
         ) + tuple(
-            DesignVariable(p.name, p.lower, p.upper, p.value, "parameter")
+            DesignVariable(p.name, p.lower, p.upper, p.value, "parameter", p.unit)
             for p in description.parameters.values()
             if p.design
         )
@@ -797,6 +797,21 @@ class FlexibleModel:
             )
         M, K = self.matrices_from_terms(self.pose_terms(Qb, data=data), y, Qb.shape[0])
         return (M[0], K[0]) if single else (M, K)
+
+    def joint_damping(self, Q, *, data: FlexibleData | None = None) -> np.ndarray:
+        """The joints' dampers as a damping matrix over the modal coordinates.
+
+        ``C = Σ c gᵀg`` with ``g`` each joint's physical relative motion (zero without
+        ``<pinflex:joint damping=...>``); :func:`pinflex.erls.joints.damping_matrices`.
+
+        Args:
+            Q: Joint coordinates (user convention), one pose (nv,) or many (n, nv).
+            data: Workspace (default: this thread's).
+
+        Returns:
+            ``C`` (ndof, ndof) or (n, ndof, ndof) [N m s/rad, N s/m and the coupled units].
+        """
+        return joint_conditions.damping_matrices(self, Q, data=data)
 
     def matrices_from_terms(self, terms: PoseTerms, y: np.ndarray, n_poses: int):
         """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs.

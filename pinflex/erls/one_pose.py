@@ -31,7 +31,7 @@ def _build_one_pose_joints(model, plan: SolvePlan) -> tuple:
     # the links whose root twist the one-pose solve reads (beams, rigid inertias, point
     # masses) and their ancestors; joints to other links (a tool frame) are skipped
     needed = set(plan.cores) | set(model.plan.inertias) | {
-        pm.link for pm in model.plan.point_masses}
+        pm.link for pm in model.plan.point_masses} | {b.link for b in model.plan.bodies}
     for j in reversed(model.plan.joints):  # children after their parents: walk back up
         if j.child in needed:
             needed.add(j.parent)
@@ -218,6 +218,16 @@ def _build_one_pose_layout(model, data) -> OnePoseLayout | None:
             W0[idx, idx] = model.point_mass_values[pm.name]
         masses.append((pm.link, r, att.lin[:3], translate_twist(pm.xyz)[:3]))
         r += 3
+    for body, att in zip(model.plan.bodies, plan.body_attach):  # folded into its beam block
+        r0, size = blocks_of[body.link]
+        core = plan.cores[body.link]
+        o = core.stop - core.start
+        T = np.zeros((6, size))
+        if att.const is not None:
+            T[:, att.start - core.start : att.stop - core.start] = att.const
+        T[:, o : o + 6] = att.lin
+        T[:, o + 6 : o + 12] = translate_twist(body.xyz)
+        W0[r0 : r0 + size, r0 : r0 + size] += T.T @ body.inertia @ T
     # planar models: rows of S that are zero at every pose leave the products (kept in S0,
     # which the per-pose fill addresses; mass_one gathers the others)
     diag_idx = np.concatenate(diag) if diag else np.zeros(0, int)

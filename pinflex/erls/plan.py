@@ -14,6 +14,7 @@ from pinflex.erls.terms import (
     PLANAR_NODE_DOFS,
     Attachment,
     BeamPlan,
+    BodyPlan,
     JointPlan,
     ModelPlan,
     PointMassPlan,
@@ -124,17 +125,28 @@ def build_plan(model) -> ModelPlan:
                 proj=_frozen(proj),
             )
         )
-    # mass carriers
+    # mass carriers; bodies on rigid links join their link's inertia (at the link origin)
     inertias = {
-        link: _frozen(inertia.spatial_matrix())
+        link: inertia.spatial_matrix()
         for link, inertia in desc.inertias.items()
         if link not in desc.flexible and inertia.mass > 0.0
     }
+    bodies = []
+    for body in desc.bodies:
+        at_com = body.spatial_matrix()
+        if body.link in beams:
+            bodies.append(BodyPlan(body.name, body.link, _frozen(body.com),
+                                   attachment(beams, body.link, body.com), _frozen(at_com)))
+        else:
+            X = translate_twist(body.com)  # twist at the body from the link-origin twist
+            inertias[body.link] = inertias.get(body.link, 0.0) + X.T @ at_com @ X
+    inertias = {link: _frozen(v) for link, v in inertias.items()}
     point_masses = tuple(
         PointMassPlan(p.name, p.link, _frozen(p.xyz), attachment(beams, p.link, p.xyz))
         for p in desc.point_masses
     )
-    carriers = set(beams) | set(inertias) | {p.link for p in point_masses}
+    carriers = set(beams) | set(inertias) | {p.link for p in point_masses} | {
+        b.link for b in bodies}
     return ModelPlan(
         links=tuple(order),
         beams=MappingProxyType(beams),
@@ -146,6 +158,7 @@ def build_plan(model) -> ModelPlan:
         nx=nx,
         x_names=x_names,
         plane_normal=None if normal is None else _frozen(normal),
+        bodies=tuple(bodies),
     )
 
 

@@ -87,6 +87,7 @@ class SolvePlan:
     pm_attach: tuple  # per model.plan.point_masses entry
     nx: int
     nv: int
+    body_attach: tuple = ()  # per model.plan.bodies entry
 
 
 def supported(model) -> bool:
@@ -156,7 +157,8 @@ def _build_solve_plan(model) -> SolvePlan:
         )
     joint_attach = tuple(_attach(model, cores, j.parent, j.xyz) for j in model.plan.joints)
     pm_attach = tuple(_attach(model, cores, p.link, p.xyz) for p in model.plan.point_masses)
-    return SolvePlan(cores, joint_attach, pm_attach, nx, model.nv)
+    body_attach = tuple(_attach(model, cores, b.link, b.xyz) for b in model.plan.bodies)
+    return SolvePlan(cores, joint_attach, pm_attach, nx, model.nv, body_attach)
 
 
 def _cumulative_transpose(X, P0, Ofs, le, n, r):
@@ -342,6 +344,21 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
             D = D + mm(np.swapaxes(GT, -1, -2), W @ GJ)
         comp[key] = (C, D)
 
+    def on_beam(link, att, gJ, rows):
+        """Motion rows ``g`` (lead, rows, nd) of a point on a beam: the section's elastic
+        twist there (its own coordinates and the root twist, explicit) and ``gJ`` on q."""
+        e = None if twists[link] is None else explicit_twist(twists[link], sources, alg)
+        e_full = None
+        if e is not None:
+            e_full = np.zeros((lead, 6, nx))
+            e_full[:, :, : e.shape[-1]] = e
+        tau = attach_twist(att, e_full, alg, nx)
+        g = np.zeros((lead, rows, nd))
+        if tau is not None:
+            g[:, :, :nx] = tau[:, :rows]
+        g[:, :, nx:] = gJ
+        return g
+
     for link, inertia in model.plan.inertias.items():
         add_rigid(-1, link, None, terms.jac[link], inertia)
     design_index = model.plan.design.mass_index
@@ -365,19 +382,13 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
         gJ = (translate_twist(xyz) @ terms.jac[link])[:, :3]
         W = value * eye3 if np.ndim(value) == 0 else value
         if link in plan.cores:  # on a beam: its own coordinates and the root twist, explicit
-            e = None if twists[link] is None else explicit_twist(twists[link], sources, alg)
-            e_full = None
-            if e is not None:
-                e_full = np.zeros((lead, 6, nx))
-                e_full[:, :, : e.shape[-1]] = e
-            tau = attach_twist(att, e_full, alg, nx)
-            g = np.zeros((lead, 3, nd))
-            if tau is not None:
-                g[:, :, :nx] = tau[:, :3]
-            g[:, :, nx:] = gJ
+            g = on_beam(link, att, gJ, 3)
             target += mm(np.swapaxes(g, -1, -2), W @ g)
         else:
             add_rigid(slot, link, translate_twist(xyz)[:3], gJ, W)
+    for body, att in zip(model.plan.bodies, plan.body_attach):  # on beams: six twist rows
+        g = on_beam(body.link, att, translate_twist(body.xyz) @ terms.jac[body.link], 6)
+        M += mm(np.swapaxes(g, -1, -2), body.inertia @ g)
     for (k, slot), (C, D) in comp.items():
         target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
         tau, w = sources[k]

@@ -262,6 +262,8 @@ def pencil(model, terms, y: np.ndarray, b: int, data=None) -> Pencil:
     Ci = np.linalg.inv(model.coord_map)
     H = Ci @ parent_rows(model, plan, alg, twists, sources, ordered)  # q = Ci r + H w
     _relative_values(M, H, Ci, nx)
+    for j, a in model.plan.conditions.armatures:  # reflected rotor inertia: a on r_j itself
+        M[:, nx + j.user_col, nx + j.user_col] += a
     # scaled elastic coordinates of the links whose stiffness depends on the design
     scale = {}
     for link, K in khat.items():

@@ -30,6 +30,9 @@ class DesignVariable:
         kind: 'mass' (a point mass with ``design="true"``) or 'parameter' (a
             ``<pinflex:parameter design="true">``: a section dimension or property, material
             constant, point-mass value or joint stiffness).
+        unit: Its unit, from its use: ``kg`` for a mass, ``m`` for a section dimension,
+            ``Pa`` for E or G, ``kg/m^3`` for a density, ``N m/rad`` or ``N/m`` for a joint
+            stiffness (:attr:`pinflex.description.params.Parameter.unit`).
     """
 
     name: str
@@ -37,6 +40,7 @@ class DesignVariable:
     upper: float
     nominal: float
     kind: str = "mass"
+    unit: str = "kg"
 
 
 @dataclass(frozen=True)
@@ -145,6 +149,28 @@ class PointMassPlan:
 
 
 @dataclass(frozen=True)
+class BodyPlan:
+    """A rigid body with full inertia on a beam (``<pinflex:body>`` or a kept URDF inertia).
+
+    Bodies on rigid links are added to that link's entry of :attr:`ModelPlan.inertias`; on a
+    beam a body moves with the cross-section at the axial station of its centre of mass.
+
+    Attributes:
+        name: Name of the body.
+        link: The flexible link carrying it.
+        xyz: (3,) centre of mass in the link frame [m], read-only.
+        attach: Elastic twist of that point (the section's motion, rigid offset included).
+        inertia: (6, 6) spatial inertia at ``xyz`` in link axes, ordering (linear, angular).
+    """
+
+    name: str
+    link: str
+    xyz: np.ndarray
+    attach: Attachment
+    inertia: np.ndarray
+
+
+@dataclass(frozen=True)
 class ModelPlan:
     """The fixed layout of a :class:`~pinflex.erls.FlexibleModel` (``model.plan``).
 
@@ -157,7 +183,8 @@ class ModelPlan:
         joints: Every joint as seen from its child, in the order of :attr:`links` [1:].
         inertias: Rigid links with mass ``{link: (6, 6) spatial inertia at the link origin}``.
         point_masses: Point masses, in the description's order.
-        carriers: Links that carry mass (beams, rigid inertias or point masses), in order.
+        carriers: Links that carry mass (beams, rigid inertias, point masses or bodies), in
+            order.
         frame_ids: Pinocchio BODY frame id of every link.
         nx: Number of elastic coordinates.
         x_names: Names of the elastic coordinates ``link.nK.{u,r}{x,y,z}``, (nx,).
@@ -166,6 +193,7 @@ class ModelPlan:
             (:class:`pinflex.erls.joints.JointLayout`).
         design: The design-dependent channels of ``M`` and ``K``
             (:class:`pinflex.erls.design.DesignLayout`).
+        bodies: Rigid bodies with full inertia on beams (:class:`BodyPlan`).
     """
 
     links: tuple[str, ...]
@@ -180,6 +208,7 @@ class ModelPlan:
     plane_normal: np.ndarray | None = None
     conditions: JointLayout = None  # type: ignore[assignment]  # set by FlexibleModel
     design: DesignLayout = None  # type: ignore[assignment]  # set by FlexibleModel
+    bodies: tuple[BodyPlan, ...] = ()
 
     @property
     def root(self) -> str:

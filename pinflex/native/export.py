@@ -28,6 +28,8 @@ rigid modes undamped), or Rayleigh ``(α, β)`` with its one meaning in pinflex
 (:func:`pinflex.linalg.held_rayleigh`): ``α M_H + β K_H`` on the deformation rates, ``M_H``,
 ``K_H`` the mass and stiffness of the arm with its motors held, so each locked-joint mode
 decays at ``α/2 + β ω²/2`` and the rigid motion is not damped (as in the simulations and FRFs).
+The joints' dampers (``<pinflex:joint damping=...>``, :meth:`FlexibleModel.joint_damping`)
+are added to any of them.
 """
 
 from __future__ import annotations
@@ -60,6 +62,7 @@ def _one_pose(arm, q: np.ndarray, y, zeta: float, rayleigh, torque_input: str) -
         damping = held_rayleigh(M, K, G, nx, alpha, beta)
     else:
         damping = np.zeros_like(M)
+    damping = damping + arm.joint_damping(q)  # the joints' dampers (zero without)
     lam, phi = scipy.linalg.eigh(K, M)
     # the elastic modes are the largest ones (the free joints' rigid ones have λ = 0)
     lam_e, phi_e = lam[nr:], phi[:, nr:]

@@ -1,7 +1,7 @@
 """Python specifications of flexible links and point masses.
 
-These objects say in Python what the ``<pinflex:flexible>`` and ``<pinflex:point_mass>``
-annotations say in XML (see docs/overlays.md). They are turned into exactly those annotations
+These objects say in Python what the ``<pinflex:flexible>``, ``<pinflex:point_mass>``,
+``<pinflex:body>`` and ``<pinflex:joint>`` annotations say in XML (see docs/overlays.md). They are turned into exactly those annotations
 and parsed by the same code, so a model declared in Python and one declared in an overlay file
 are the same model.
 
@@ -154,6 +154,137 @@ class Mass:
         return ET.Element(_NS + "point_mass", attrs)
 
 
+@dataclass(frozen=True)
+class Body:
+    """A rigid body with mass and rotational inertia on a link (a motor, a flange, a tool).
+
+    What ``<pinflex:body>`` says in XML. On a beam it moves with the cross-section at the axial
+    station of its centre of mass, with a rigid offset from the axis.
+
+    Args:
+        link: Link carrying the body.
+        mass: Mass [kg], > 0.
+        xyz: Centre of mass in the link frame [m].
+        inertia: Rotational inertia about the centre of mass in link axes [kg m²]: a 3×3
+            matrix or ``(ixx, ixy, ixz, iyy, iyz, izz)``; default zero (a point mass).
+    """
+
+    link: str
+    mass: float
+    xyz: Sequence[float] = (0.0, 0.0, 0.0)
+    inertia: Sequence = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+    def element(self, name: str) -> ET.Element:
+        """The ``<pinflex:body>`` element of this body under ``name``.
+
+        Raises:
+            InvalidDescription: ``xyz`` is not three numbers or ``inertia`` neither a 3×3
+                matrix nor six numbers.
+        """
+        import numpy as np
+
+        I = np.asarray(self.inertia, dtype=float)
+        if I.shape == (3, 3):
+            six = (I[0, 0], I[0, 1], I[0, 2], I[1, 1], I[1, 2], I[2, 2])
+        elif I.shape == (6,):
+            six = tuple(I)
+        else:
+            raise InvalidDescription(f"body '{name}': inertia must be a 3x3 matrix or (ixx, "
+                                     f"ixy, ixz, iyy, iyz, izz) [kg m^2], got shape {I.shape}")
+        attrs = {"name": name, "link": self.link, "xyz": _vec(self.xyz, f"body '{name}' xyz"),
+                 "mass": _num(self.mass)}
+        attrs.update({k: _num(v) for k, v in zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+                                                  six)})
+        return ET.Element(_NS + "body", attrs)
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """How a moving joint is held: what ``<pinflex:joint>`` says in XML.
+
+    Given as ``joints={name: JointSpec(...)}`` to :class:`~pinflex.FlexibleModel`,
+    :meth:`~pinflex.FlexibleModel.from_pinocchio` or :func:`pinflex.example_robot`; see
+    :func:`servo` for a PD-controlled drive.
+
+    Args:
+        stiffness: Spring on the joint's physical relative motion [N m/rad or N/m]; None for
+            none (free).
+        damping: Damper on the same motion [N m s/rad or N s/m], >= 0.
+        armature: Reflected rotor inertia, rotor inertia × gear ratio² [kg m² or kg], >= 0,
+            added to M on the same motion (as Pinocchio's ``model.armature``, MuJoCo's
+            ``armature``); None keeps the file's.
+        locked: Held rigidly (stiffness and damping must then be absent).
+    """
+
+    stiffness: float | None = None
+    damping: float = 0.0
+    armature: float | None = None
+    locked: bool = False
+
+    def __post_init__(self):
+        if self.locked and (self.stiffness is not None or self.damping):
+            raise InvalidDescription("JointSpec: a locked joint takes no stiffness or damping")
+        for what, v in (("stiffness", self.stiffness), ("damping", self.damping),
+                        ("armature", self.armature)):
+            if v is None:
+                continue
+            if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
+                    or v < 0 or (what == "stiffness" and v == 0):
+                raise InvalidBeamProperty(f"JointSpec.{what} = {v!r} must be a finite number "
+                                          + ("> 0" if what == "stiffness" else ">= 0"))
+
+    def element(self, name: str) -> ET.Element:
+        """The ``<pinflex:joint>`` element of this specification for joint ``name``."""
+        attrs = {"name": name}
+        if self.locked:
+            attrs["locked"] = "true"
+        if self.stiffness is not None:
+            attrs["stiffness"] = _num(self.stiffness)
+        if self.damping:
+            attrs["damping"] = _num(self.damping)
+        if self.armature:
+            attrs["armature"] = _num(self.armature)
+        return ET.Element(_NS + "joint", attrs)
+
+
+def servo(kp: float, kd: float = 0.0, *, gear_ratio: float = 1.0, rotor_inertia: float = 0.0,
+          gains: str = "joint") -> JointSpec:
+    """A PD-controlled drive as a joint spring, damper and reflected rotor inertia.
+
+    About an equilibrium, a joint-side PD law ``τ = Kp (q_d − q) − Kd q̇`` is a spring
+    ``k = Kp`` and a damper ``c = Kd`` on the joint's relative motion. Gains on the motor side
+    (``τ_m = Kp (θ_d − θ) − Kd θ̇`` with ``θ = N q`` and ``τ = N τ_m``) reflect through the
+    gear ratio ``N``: ``k = N² Kp``, ``c = N² Kd``. The rotor (inertia ``I_r``) turns ``N``
+    times faster than the joint: its kinetic energy ``½ I_r (N q̇)²`` is an armature
+    ``N² I_r`` on the joint. Integral action, current-loop bandwidth, friction and gearbox
+    compliance are left out (a gearbox's own stiffness in series would lower ``k``).
+
+    Args:
+        kp: Proportional gain [N m/rad or N/m; motor side: N m/rad of the motor].
+        kd: Derivative gain [N m s/rad or N s/m], >= 0.
+        gear_ratio: ``N = θ_motor / q`` (>= 1 for a reducer).
+        rotor_inertia: Motor rotor inertia [kg m²], >= 0.
+        gains: ``'joint'`` (gains act on the joint angle) or ``'motor'`` (on the motor angle).
+
+    Returns:
+        A :class:`JointSpec` with ``stiffness``, ``damping`` and ``armature``.
+    """
+    from pinflex.exceptions import ConfigurationError
+
+    if gains not in ("joint", "motor"):
+        raise ConfigurationError(f"gains='{gains}': expected 'joint' or 'motor'")
+    for what, v in (("kp", kp), ("kd", kd), ("gear_ratio", gear_ratio),
+                    ("rotor_inertia", rotor_inertia)):
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or \
+                v < 0 or (what in ("kp", "gear_ratio") and v == 0):
+            raise ConfigurationError(f"servo: {what} = {v!r} must be a finite number "
+                                     + ("> 0" if what in ("kp", "gear_ratio") else ">= 0"))
+    n2 = float(gear_ratio) ** 2
+    scale = n2 if gains == "motor" else 1.0
+    return JointSpec(stiffness=scale * float(kp), damping=scale * float(kd),
+                     armature=n2 * float(rotor_inertia))
+
+
 def annotation_elements(
     flexible: dict[str, Beam] | None,
     masses: dict[str, Mass] | None,
@@ -168,9 +299,10 @@ def annotation_elements(
             )
         out.append(spec.element(link))
     for name, mass in (masses or {}).items():
-        if not isinstance(mass, Mass):
+        if not isinstance(mass, Mass | Body):
             raise InvalidDescription(
-                f"masses['{name}'] must be a pinflex.Mass, got {type(mass).__name__}"
+                f"masses['{name}'] must be a pinflex.Mass or pinflex.Body, got "
+                f"{type(mass).__name__}"
             )
         out.append(mass.element(name))
     if coordinates is not None:

@@ -93,7 +93,8 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
     nd = nx + nv
     channels = model.design_channels
     locks = bool(model.plan.conditions.locked_joints)
-    if not channels and not model.plan.conditions.spring_joints and not locks:
+    armatures = model.plan.conditions.armatures
+    if not channels and not model.plan.conditions.spring_joints and not locks and not armatures:
         return M, K0
     salg = solve.lead_algebra(alg, 1)
     twists, sources = solve.factored_twists(model, plan, terms, salg)
@@ -115,6 +116,11 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
              for j, _ in model.plan.conditions.spring_joints}
     for j, k in model.plan.conditions.spring_joints:
         K[emb] += k * units[j.name]
+    # reflected rotor inertias: M += a gᵀg on the same relative motion (pose jets)
+    for j, a in armatures:
+        unit = units[j.name] if j.name in units else _spring_unit(model, terms, salg, twists,
+                                                                  sources, j)
+        M[emb] += a * unit
     if channels:
         names = [d.name for d in model.design]
         y0 = np.asarray(y0, dtype=float)

@@ -15,13 +15,14 @@ URDF joint limits raise :class:`~pinflex.exceptions.JointLimitsExceeded` (or war
 
 from __future__ import annotations
 
+import warnings
 from typing import Literal
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from pinflex.exceptions import IKNotConverged, InvalidPath, LinkNotFound
+from pinflex.exceptions import IKNotConverged, InvalidPath, LinkNotFound, TrajectoryWarning
 from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory, solve_ik
 
@@ -205,14 +206,41 @@ def joint_limits(arm) -> tuple[np.ndarray, np.ndarray]:
 
 def check_joint_limits(arm, traj: Trajectory, *,
                        on_violation: Literal["warn", "raise"] = "raise") -> np.ndarray:
-    """Samples of ``traj`` (arm coordinates) outside the URDF joint limits, (ns, nv) mask."""
+    """Samples of ``traj`` (arm coordinates) outside the URDF joint limits, (ns, nv) mask.
+
+    Joint values that look like degrees are named first (:func:`warn_if_degrees`).
+    """
     lo, hi = joint_limits(arm)
     rel = Trajectory(traj.times_s, traj.q @ arm.coord_map.T, traj.joint_names, traj.name)
+    warn_if_degrees(arm, rel.q)
     return rel.check_limits(lo, hi, on_violation=on_violation)
+
+
+def warn_if_degrees(arm, q_relative: np.ndarray) -> None:
+    """Warn (TrajectoryWarning) when a revolute or continuous joint goes beyond one turn.
+
+    Joint values are in radians; |q| > 2π on a turning joint looks like degrees, and a
+    continuous joint without limits would otherwise take 90 for a quarter turn silently.
+
+    Args:
+        arm: The flexible model.
+        q_relative: Relative (Pinocchio) joint values, (ns, nv) [rad or m].
+    """
+    q = np.atleast_2d(np.asarray(q_relative, dtype=float))
+    joints = [arm.description.joints[n] for n in arm.joint_names]
+    big = [k for k, j in enumerate(joints) if j.type in ("revolute", "continuous")
+           and np.max(np.abs(q[:, k])) > 2 * np.pi + 1e-9]
+    if big:
+        worst = ", ".join(f"'{joints[k].name}' reaches {np.max(np.abs(q[:, k])):.4g}"
+                          for k in big[:4])
+        warnings.warn(
+            f"joint values beyond one turn ({worst}) look like degrees: joint values are in "
+            "radians (convert with numpy.radians)", TrajectoryWarning, stacklevel=3)
 
 
 __all__ = [
     "check_joint_limits",
+    "warn_if_degrees",
     "joint_limits",
     "path_trajectory",
     "sample_polyline",
