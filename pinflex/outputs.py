@@ -127,3 +127,39 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
     with atomic_path(path, "figure") as tmp:
         fig.savefig(tmp, format=fmt, **kwargs)
     return path
+
+
+def json_text(obj, what: str = "the result", **kwargs) -> str:
+    """``json.dumps(obj)`` that never writes ``NaN`` or ``Infinity`` (which are not JSON).
+
+    Raises:
+        OutputError: ``obj`` holds a non-finite number; the message names where (a result
+            that is not finite is a defect or a bad input, never something to print).
+    """
+    import json
+
+    try:
+        return json.dumps(obj, allow_nan=False, **kwargs)
+    except ValueError:
+        where = _non_finite(obj, "")
+        raise OutputError(f"{what} holds a non-finite number at {where or 'top level'}; "
+                          "refusing to write invalid JSON (check the inputs' magnitudes)"
+                          ) from None
+
+
+def _non_finite(obj, path: str) -> str | None:
+    import math
+
+    if isinstance(obj, float):
+        return path if not math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            hit = _non_finite(v, f"{path}.{k}" if path else str(k))
+            if hit is not None:
+                return hit
+    elif isinstance(obj, list | tuple):
+        for i, v in enumerate(obj):
+            hit = _non_finite(v, f"{path}[{i}]")
+            if hit is not None:
+                return hit
+    return None

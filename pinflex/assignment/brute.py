@@ -67,7 +67,7 @@ def exact_cost(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[T
             frequencies.
         EigenSolverError: A design makes the eigenproblem singular or unrestrained.
     """
-    Q = model.check_q(trajectory.q)
+    Q = model.check_q(trajectory.in_order(model.joint_names))
     ns = Q.shape[0]
     w = trajectory.trapezoid_weights()
     M0, Md, K = model.assemble(model.pose_terms(Q), _batch(ns))

@@ -201,7 +201,7 @@ def size_for_floors(
         raise ConfigurationError(f"max_expansions = {max_expansions!r}: give a whole number >= 1")
     t_all = time.perf_counter()
     check_trajectory_limits(model, trajectory)
-    Q = np.atleast_2d(model.check_q(trajectory.q))
+    Q = np.atleast_2d(model.check_q(trajectory.in_order(model.joint_names)))
     floors = tuple((int(m), float(f)) for m, f in floors)
     if not floors:
         raise ConfigurationError("give at least one floor (mode, f_min_hz)")

@@ -34,7 +34,6 @@ import itertools
 import json
 import re
 import time
-import tomllib
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -86,11 +85,15 @@ def split_values(text: str) -> list[str]:
 
 
 def parse_value(text: str):
-    """A TOML literal, or the bare string if the text is not one."""
+    """A TOML literal (numbers by pinflex's grammar), or the bare string if it is not one."""
+    from pinflex.validation import load_toml
+
     try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
-        return text
+        return load_toml(f"v = {text}", "--sweep", InvalidSweep)["v"]
+    except InvalidSweep as exc:
+        if "not valid TOML" in str(exc):
+            return text
+        raise InvalidSweep(f"--sweep value {text!r}: {str(exc).split(': ', 2)[-1]}") from None
 
 
 def parse_sweeps(options: list[str] | None) -> list[tuple[str, list]]:
@@ -234,10 +237,19 @@ def plan_cases(config_path: str | Path, sweeps: list[tuple[str, list]]):
     """
     from pinflex.assignment.study import load_config
 
+    from pinflex.assignment.study import check_config
+    from pinflex.exceptions import StudyError
+
     base = load_config(config_path)
     out = []
     for overrides in sweep_cases(sweeps):
         cfg = apply_overrides(base, overrides)
+        if overrides:
+            try:
+                check_config(cfg, "--sweep " + ", ".join(f"{k}={v!r}"
+                                                         for k, v in overrides.items()))
+            except StudyError as exc:
+                raise InvalidSweep(str(exc)) from None
         config = case_config(Path(config_path), cfg, overrides)
         out.append((config_hash(config), config, cfg, overrides))
     return out

@@ -58,7 +58,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         from pinflex.erls.along import trajectory_for
         from pinflex.trajectory import Trajectory
 
-        traj = Trajectory.from_csv(args.trajectory)
+        traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
         q = trajectory_for(model, traj)
         times = traj.times_s
     else:

@@ -86,9 +86,9 @@ def cmd_modes(args: argparse.Namespace) -> int:
                                "estimated_error": fidelity.estimate.tolist(),
                                "observed_order": fidelity.order.tolist(),
                                "estimate": "Richardson from three uniform refinements"}
-        import json
+        from pinflex.outputs import json_text
 
-        print(json.dumps(out))
+        print(json_text(out))
         return 0
     print(f"{model.description.name}: {model.ndof} dof ({model.nx} elastic + "
           f"{model.ndof - model.nx} joint), {'planar' if model.planar else 'spatial'}, "
@@ -180,7 +180,7 @@ def _along(model, args: argparse.Namespace) -> int:
     from pinflex.progress import ProgressBar
     from pinflex.trajectory import Trajectory
 
-    traj = Trajectory.from_csv(args.trajectory)
+    traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
     bar = ProgressBar(traj.n_samples, "modes along: samples",
                       enabled=not args.no_progress and sys.stderr.isatty())
     res = modes_along(model, traj, modes=args.modes or 3, progress=bar)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from typing import Any
@@ -220,7 +219,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     out_json = {"drive": settings.drive, "designs": designs, "files": files,
                 "total_time_s": total}
     if args.json:
-        print(json.dumps(out_json))
+        from pinflex.outputs import json_text
+
+        print(json_text(out_json))
         return 0
     w = sys.stdout.write
     w(f"drive: {settings.drive}; output frame '{reports[0].frame}'; residual vibration with "

@@ -39,6 +39,10 @@ def add_parser(sub) -> None:
                    help="write a static HTML preview instead of serving meshcat")
     p.add_argument("--serve-seconds", type=float, default=None, metavar="S",
                    help="stop serving after S seconds (default: until Ctrl-C)")
+    p.add_argument("--bind", default="127.0.0.1", metavar="ADDRESS",
+                   help="address the served viewer listens on (default 127.0.0.1: this machine "
+                   "only); 0.0.0.0 serves every network interface, without authentication: "
+                   "anyone who can reach the machine sees the scene")
     p.set_defaults(func=cmd_view)
 
 
@@ -64,13 +68,13 @@ def cmd_view(args: argparse.Namespace) -> int:
         raise ConfigurationError(
             f"mode {args.mode} does not exist: the model has elastic modes 1..{model.n_elastic}"
         )
-    vis = None if args.html else served_visualizer()
+    vis = None if args.html else served_visualizer(bind=args.bind)
     progress = not args.no_progress and sys.stderr.isatty()
     if args.trajectory:
         from pinflex.erls.along import trajectory_for
         from pinflex.trajectory import Trajectory
 
-        traj = Trajectory.from_csv(args.trajectory)
+        traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
         from pinflex.visualization.modes_page import add_grid
         from pinflex.visualization.robot import pose_state, scene_points
 
@@ -97,8 +101,10 @@ def cmd_view(args: argparse.Namespace) -> int:
     if args.html:
         print(f"wrote {write(args.html)}")
         return 0
-    vis = vis or served_visualizer()
-    print(f"meshcat is serving the preview at {vis.url()}")
+    vis = vis or served_visualizer(bind=args.bind)
+    print(f"meshcat is serving the preview at {vis.url()}"
+          + ("" if args.bind == "127.0.0.1" else
+             f" (listening on {args.bind}: other machines can see it)"))
     try:
         if args.serve_seconds is None:
             print("press Ctrl-C to stop")

@@ -11,6 +11,8 @@ bound to so that a wrong namespace is caught even when its URI looks nothing lik
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
@@ -42,15 +44,43 @@ class XmlDocument:
         return self.lines.get(id(el))
 
 
+def input_path(path, what: str = "file", error: type[PinflexError] = UnreadableFile) -> Path:
+    """``path`` as a :class:`Path`: a ``str`` or path-like without NUL; else ``error``."""
+    if isinstance(path, Path):
+        out = path
+    elif isinstance(path, str) or isinstance(path, os.PathLike):
+        out = Path(path)
+    else:
+        raise error(f"{what} must be a file path, got {type(path).__name__} {_short(path)}")
+    if "\x00" in str(out):
+        raise error(f"{what} {_short(str(out))} contains a NUL character")
+    return out
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:60] + "..." + text[-15:]
+
+
+def file_kind(path: Path, what: str, error: type[PinflexError]) -> os.stat_result:
+    """``stat`` of an existing regular file, or ``error`` saying why it cannot be read."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise error(f"{what} {_short(str(path))} does not exist") from None
+    except OSError as exc:  # name too long, not a directory, permission, loop
+        raise error(f"{what} {_short(str(path))} cannot be read: "
+                    f"{exc.strerror or type(exc).__name__}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"{what} '{path}' is not a regular file")
+    return st
+
+
 def read_text(path: str | Path, what: str = "file",
               error: type[PinflexError] = UnreadableFile) -> str:
     """The UTF-8 text of an input file, or ``error`` (:class:`UnreadableFile`) saying why not."""
-    path = Path(path)
-    if not path.exists():
-        raise error(f"{what} '{path}' does not exist")
-    if not path.is_file():
-        raise error(f"{what} '{path}' is not a regular file")
-    size = path.stat().st_size
+    path = input_path(path, what, error)
+    size = file_kind(path, what, error).st_size
     if size > MAX_FILE_BYTES:
         raise error(
             f"{what} '{path}' has {size} bytes, more than the {MAX_FILE_BYTES} a description "

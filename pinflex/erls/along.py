@@ -12,7 +12,6 @@ veering / ambiguous events, and writes itself as CSV, JSON or a PNG chart.
 from __future__ import annotations
 
 import csv
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -112,7 +111,9 @@ class ModesAlong:
 
     def to_json(self) -> str:
         """:meth:`to_dict` as one JSON text."""
-        return json.dumps(self.to_dict())
+        from pinflex.outputs import json_text
+
+        return json_text(self.to_dict())
 
     def summary(self) -> list[dict]:
         """Per mode: minimum, maximum, start and end frequency [Hz]."""
@@ -188,21 +189,16 @@ class ModesAlong:
 def trajectory_for(arm, traj: Trajectory) -> np.ndarray:
     """Joint samples (ns, nv) of a trajectory in the arm's joint order.
 
-    Columns are matched by joint name; a trajectory with default names ``q1..qn`` and exactly
-    ``nv`` (or ``nq``) columns is taken in the arm's order (or as Pinocchio configurations).
+    Columns are matched by joint name (:meth:`Trajectory.in_order`); a trajectory built
+    without names with exactly ``nv`` (or ``nq``) columns is taken in the arm's order (or as
+    Pinocchio configurations).
+
+    Raises:
+        InvalidTrajectory: Columns naming no joint, joints without a column, duplicates.
     """
-    names = tuple(traj.joint_names)
-    if set(names) >= set(arm.joint_names):
-        idx = [names.index(n) for n in arm.joint_names]
-        return arm.check_q(traj.q[:, idx])
-    default = tuple(f"q{j + 1}" for j in range(traj.q.shape[1]))
-    if names == default and traj.q.shape[1] in (arm.nv, arm.model.nq):
+    if not traj.named and traj.q.shape[1] == arm.model.nq != arm.nv:
         return arm.check_q(traj.q)
-    missing = [n for n in arm.joint_names if n not in names]
-    raise InvalidTrajectory(
-        f"the trajectory's columns {list(names)} do not name the arm's joints; missing "
-        f"{missing} (header: t, {', '.join(arm.joint_names)})"
-    )
+    return arm.check_q(traj.in_order(arm.joint_names))
 
 
 def modes_along(

@@ -38,6 +38,11 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex.description import NAMESPACE, RobotDescription, load
+from pinflex.description.crosscheck import (
+    check_pinocchio_reading,
+    native_stderr,
+    urdfdom_message,
+)
 from pinflex.erls import assembly, kinematics, modal
 from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
@@ -242,10 +247,15 @@ class FlexibleModel:
         if _reuse is not None:
             self.model = _reuse.model  # the same URDF: Pinocchio's model is shared, unchanged
         else:
+            native: list[str] = []
             try:
-                self.model = pin.buildModelFromXML(description.urdf_xml)
+                with native_stderr() as native:  # urdfdom's messages go into the error
+                    self.model = pin.buildModelFromXML(description.urdf_xml)
             except Exception as exc:  # Pinocchio raises plain RuntimeError/ValueError
-                raise InvalidDescription(f"Pinocchio could not load the URDF: {exc}") from exc
+                said = urdfdom_message(native)
+                raise InvalidDescription(f"Pinocchio could not load the URDF: {exc}"
+                                         + (f" (urdfdom: {said})" if said else "")) from None
+            check_pinocchio_reading(description, self.model, native)
         self.joint_names = tuple(self.model.names[1:])
         self.nv = self.model.nv
         if self.nv != len(self.joint_names):

@@ -51,10 +51,13 @@ def load_visual_model(model: FlexibleModel) -> pin.GeometryModel | None:
         dirs.append(str(robot_data_dir().parent.parent))
     except InvalidDescription:
         pass
+    from pinflex.description.crosscheck import native_stderr
+
     try:
-        return pin.buildGeomFromUrdfString(
-            model.model, desc.urdf_xml, pin.GeometryType.VISUAL, package_dirs=dirs
-        )
+        with native_stderr():  # urdfdom and assimp messages stay off the terminal
+            return pin.buildGeomFromUrdfString(
+                model.model, desc.urdf_xml, pin.GeometryType.VISUAL, package_dirs=dirs
+            )
     except (RuntimeError, ValueError) as exc:
         warnings.warn(
             f"the URDF's visual geometry could not be loaded ({exc}); drawing simple shapes",
