@@ -155,3 +155,29 @@ def check_taylor(nvars: int, order: int, ndof: int, ndesign: int = 0) -> None:
     check_memory(nbytes, what, "lower the order, expand fewer joints or design variables, "
                  "or use fewer elements")
     warn_time(seconds, what)
+
+
+#: Most poses a single modal sweep may take (a walk between poses, a trajectory); each is a
+#: dense modal analysis, so this many take minutes even on small models.
+MAX_POSES = 100_000
+
+
+def check_poses(n_poses: float, ndof: int, what: str, fix: str,
+                maximum: int = MAX_POSES) -> int:
+    """Bound a sweep of modal analyses before it starts: count, memory and time.
+
+    Raises:
+        ResourceLimitExceeded: More than ``maximum`` poses, or more memory than allowed; the
+            message gives the count and the time or memory estimate.
+    """
+    nbytes, seconds = modal_estimate(ndof, 1)
+    seconds = max(seconds, 5e-4)  # per pose with tracking, measured on small models
+    if not n_poses <= maximum:
+        raise ResourceLimitExceeded(
+            f"{what} needs {n_poses:.4g} modal analyses of {ndof} dof (about "
+            f"{n_poses * seconds:.3g} s), more than the {maximum} allowed; {fix}")
+    n = int(n_poses)
+    check_memory(float(n) * 2 * ndof * min(ndof, 64) * _BYTES,
+                 f"{what} ({n} poses of {ndof} dof)", fix)
+    warn_time(n * seconds, f"{what} ({n} modal analyses of {ndof} dof)")
+    return n

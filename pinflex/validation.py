@@ -221,6 +221,8 @@ def float_array(value, name: str, error: type[PinflexError] = ConfigurationError
     if isinstance(value, np.ma.MaskedArray):
         raise error(f"{name} must be a plain array, got a masked array (its mask would be "
                     "ignored); fill or drop the masked entries first")
+    if isinstance(value, list | tuple) and _has_bool(value):
+        raise error(f"{name} must be numbers, got a boolean in {_short(value)}")
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as exc:
@@ -253,6 +255,18 @@ def float_array(value, name: str, error: type[PinflexError] = ConfigurationError
         return raw.astype(float, copy=False)
     except OverflowError as exc:  # pragma: no cover - ints beyond float range
         raise error(f"{name} has values too large for a double: {_short(value)}") from exc
+
+
+def _has_bool(seq) -> bool:
+    """Whether a (nested) list or tuple holds a boolean (NumPy would read it as 0 or 1)."""
+    import numpy as np
+
+    for v in seq:
+        if isinstance(v, bool | np.bool_):
+            return True
+        if isinstance(v, list | tuple) and _has_bool(v):
+            return True
+    return False
 
 
 def require_number(value, name: str, *, error: type[PinflexError] = ConfigurationError,

@@ -55,9 +55,24 @@ def inertia_text(model) -> str:
     return ("link inertia: " + "; ".join(notes)) if notes else ""
 
 
+def add_allow_paths(p: argparse.ArgumentParser) -> None:
+    """``--allow-paths``: read files a description names from outside its folder."""
+    p.add_argument("--allow-paths", action="store_true",
+                   help="read an overlay's base URDF and mesh files from anywhere (default: "
+                   "only from the description's folder and the package roots)")
+
+
+def robot_description(args: argparse.Namespace):
+    """The description of ``args.urdf``, with ``--allow-paths`` if the command has it."""
+    from pinflex.description import load
+
+    return load(args.urdf, allow_paths=bool(getattr(args, "allow_paths", False)))
+
+
 def add_robot_arguments(p: argparse.ArgumentParser) -> None:
     """The robot file, pose, parameters, joints and planar switch of ``modes`` and ``view``."""
     p.add_argument("urdf", help="annotated URDF (or pinflex overlay) file")
+    add_allow_paths(p)
     p.add_argument("--q", type=float, nargs="+", metavar="V",
                    help="joint values, one per moving joint, in the file's convention "
                    "(default: zeros)")

@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, parse_values
+from pinflex.cli.common import add_robot_arguments, parse_values, robot_description
 
 
 def add_parser(sub) -> None:
@@ -51,7 +51,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     from pinflex.erls import FlexibleModel
     from pinflex.native.export import linear_model, save_linear_model
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
+    model = FlexibleModel(robot_description(args), planar=args.planar, values=parse_values(args.set),
                           joints=args.joints)
     times = None
     if args.trajectory:

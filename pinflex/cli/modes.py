@@ -6,7 +6,13 @@ import argparse
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, inertia_text, joints_text, parse_values
+from pinflex.cli.common import (
+    add_robot_arguments,
+    inertia_text,
+    joints_text,
+    parse_values,
+    robot_description,
+)
 
 
 def add_parser(sub) -> None:
@@ -35,7 +41,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
     """Run ``pinflex modes``."""
     from pinflex.erls import FlexibleModel
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
+    model = FlexibleModel(robot_description(args), planar=args.planar, values=parse_values(args.set),
                           joints=args.joints)
     if args.trajectory is not None:
         if args.tol is not None:

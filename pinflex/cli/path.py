@@ -7,7 +7,12 @@ import sys
 
 import numpy as np
 
-from pinflex.cli.common import add_model_arguments, parse_values
+from pinflex.cli.common import (
+    add_allow_paths,
+    add_model_arguments,
+    parse_values,
+    robot_description,
+)
 from pinflex.progress import ProgressBar
 
 
@@ -20,6 +25,7 @@ def add_parser(sub) -> None:
         "Writes a CSV (t, joint names) for `pinflex modes FILE --trajectory`.",
     )
     p.add_argument("urdf", help="annotated URDF (or pinflex overlay) file")
+    add_allow_paths(p)
     p.add_argument("--frame", required=True, help="frame (link) that follows the path")
     p.add_argument("--through", type=float, nargs=3, action="append", required=True,
                    metavar=("X", "Y", "Z"), help="a waypoint [m] (repeat, in order)")
@@ -48,7 +54,7 @@ def cmd_path(args: argparse.Namespace) -> int:
     from pinflex.exceptions import ConfigurationError
     from pinflex.trajectory.cartesian import path_from_spec
 
-    model = FlexibleModel(args.urdf, values=parse_values(args.set), joints=args.joints)
+    model = FlexibleModel(robot_description(args), values=parse_values(args.set), joints=args.joints)
     orientation: object = args.orientation
     if orientation not in ("free", "keep"):
         try:

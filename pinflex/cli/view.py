@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, parse_values
+from pinflex.cli.common import add_robot_arguments, parse_values, robot_description
 
 
 def add_parser(sub) -> None:
@@ -59,7 +59,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     for name, value in (("--amplitude", args.amplitude), ("--serve-seconds", args.serve_seconds)):
         if value is not None and not (np.isfinite(value) and value > 0.0):
             raise ConfigurationError(f"{name} {value} must be a positive finite number")
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
+    model = FlexibleModel(robot_description(args), planar=args.planar, values=parse_values(args.set),
                           joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)
     if not 1 <= args.mode <= model.n_elastic:

@@ -40,7 +40,7 @@ from pinflex.validation import parse_number, raise_problems
 
 
 def load(path: str | Path, values: dict[str, float] | None = None, *,
-         plausibility: str = "refuse") -> RobotDescription:
+         plausibility: str = "refuse", allow_paths: bool = False) -> RobotDescription:
     """Read an annotated URDF file or a pinflex overlay (see :func:`apply_overlay`).
 
     Every annotation is checked against :mod:`pinflex.description.schema` first (file, line,
@@ -51,7 +51,13 @@ def load(path: str | Path, values: dict[str, float] | None = None, *,
         values: Overrides of ``<pinflex:parameter>`` values (checked against their bounds).
         plausibility: 'refuse' values that are non-physical for a robot link (default), or
             only 'warn' about them (impossible values are refused either way).
+        allow_paths: Read an overlay's base URDF and the meshes of the visual geometry
+            from anywhere; by default they must lie in the file's folder (or the base URDF's,
+            for its meshes) or in example-robot-data (:class:`UnsafePath` otherwise).
     """
+    from pinflex.validation import require_bool
+
+    allow_paths = require_bool(allow_paths, "allow_paths")
     path = input_path(path, "URDF file", UnreadableFile)
     values = check_values(values)
     text = read_text(path, "URDF file")
@@ -60,15 +66,15 @@ def load(path: str | Path, values: dict[str, float] | None = None, *,
         checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False,
                                               values=values)
         raise_problems(str(path), problems, " in the overlay")
-        base = resolve_base(doc.root.get("base", ""), path.parent)
+        base = resolve_base(doc.root.get("base", ""), path.parent, allow_paths=allow_paths)
         flexible = frozenset(el.get("link", "") for el in doc.root.findall(_NS + "flexible"))
         base_text, base_problems = _checked_base(base, flexible, plausibility)
         raise_problems(str(base), list(base_problems))
         merged = apply_overlay(base_text, doc.root)
         return _build(ET.fromstring(merged), merged, base.parent, values, str(path), checked,
-                      plausibility)
+                      plausibility, allow_paths)
     return parse(text, base_dir=path.parent, values=values, source=str(path),
-                 plausibility=plausibility)
+                 plausibility=plausibility, allow_paths=allow_paths)
 
 
 def check_values(values) -> dict[str, float] | None:
@@ -107,7 +113,7 @@ def _checked_base_cached(base: str, _mtime: int, _size: int, flexible: frozenset
 
 def parse(urdf_xml: str, base_dir: Path | None = None,
           values: dict[str, float] | None = None, *, source: str = "<string>",
-          plausibility: str = "refuse") -> RobotDescription:
+          plausibility: str = "refuse", allow_paths: bool = False) -> RobotDescription:
     """Parse URDF text with pinflex annotations, checked as :func:`load` does.
 
     Args:
@@ -118,6 +124,8 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
             point masses set by :class:`pinflex.FlexibleModel`).
         source: Name of the text in messages.
         plausibility: 'refuse' (default) or 'warn' about non-physical values.
+        allow_paths: Let the visual geometry read meshes outside ``base_dir`` and the
+            package roots (see :func:`load`).
     """
     values = check_values(values)
     doc = parse_xml(urdf_xml, source)
@@ -127,12 +135,13 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
         flexible = {el.get("link", "") for el in doc.root.findall(_NS + "flexible")}
         problems += check_urdf(doc, flexible, raise_now=False)
     raise_problems(source, problems)
-    return _build(doc.root, urdf_xml, base_dir, values, source, checked, plausibility)
+    return _build(doc.root, urdf_xml, base_dir, values, source, checked, plausibility,
+                  allow_paths)
 
 
 def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
            values: dict[str, float] | None, source: str, checked: Checked,
-           plausibility: str) -> RobotDescription:
+           plausibility: str, allow_paths: bool = False) -> RobotDescription:
     if root_el.tag != "robot":
         raise InvalidDescription(f"the URDF's root element is <{root_el.tag}>, expected <robot>")
     params = parse_parameters(root_el, _NS, values)
@@ -207,6 +216,7 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
         values={k: float(v) for k, v in (values or {}).items() if k in params},
         bodies=tuple(bodies),
         inertia_notes=tuple(notes),
+        allow_paths=bool(allow_paths),
     )
     check_physical(desc, checked, source, plausibility=plausibility)
     return desc

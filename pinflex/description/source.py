@@ -76,6 +76,70 @@ def file_kind(path: Path, what: str, error: type[PinflexError]) -> os.stat_resul
     return st
 
 
+def confine(path: Path, roots, what: str, *, allow: bool = False) -> Path:
+    """``path`` resolved (symbolic links followed), refused unless it lies inside a root.
+
+    Args:
+        path: The file a description names.
+        roots: Folders it may lie in (the model's folder, package roots).
+        what: What the file is, for the message.
+        allow: Skip the check (``allow_paths=True``, ``--allow-paths``).
+
+    Raises:
+        UnsafePath: Outside every root.
+    """
+    from pinflex.exceptions import UnsafePath
+
+    resolved = Path(path).resolve()
+    if allow:
+        return resolved
+    real_roots = [Path(r).resolve() for r in roots if r is not None]
+    if any(resolved == r or resolved.is_relative_to(r) for r in real_roots):
+        return resolved
+    raise UnsafePath(
+        f"{what} {_short(str(path))} lies outside the model's folder and package roots "
+        f"({', '.join(str(r) for r in real_roots) or 'none'}); copy it there, or allow it "
+        "explicitly (allow_paths=True, --allow-paths)"
+    )
+
+
+def check_mesh_paths(urdf_xml: str, base_dir: Path | None, package_dirs, *,
+                     allow: bool = False) -> None:
+    """Refuse visual/collision meshes outside the model's folder and the package roots.
+
+    ``package://pkg/rest`` must be found under a package root (``root/pkg/rest``), a relative
+    file name under ``base_dir``; absolute names, ``file://`` URIs and ``..`` leaving those
+    folders are refused (they would be read and embedded in a preview page), unless ``allow``.
+
+    Raises:
+        UnsafePath: Naming the first mesh outside.
+    """
+    import xml.etree.ElementTree as ET
+
+    from pinflex.exceptions import UnsafePath
+
+    if allow:
+        return
+    roots = [Path(d) for d in package_dirs if d]
+    for el in ET.fromstring(urdf_xml).iter("mesh"):
+        name = el.get("filename") or ""
+        what = f"mesh '{_short(name)[1:-1]}'"
+        if name.startswith("package://"):
+            rest = name[len("package://"):]
+            found = [r / rest for r in roots if (r / rest).exists()]
+            if not found:
+                raise UnsafePath(f"{what} is in no package root ({', '.join(map(str, roots))});"
+                                 " install the package or allow other paths (--allow-paths)")
+            for cand in found:
+                confine(cand, roots, what)
+        elif name.startswith("file://") or Path(name).is_absolute():
+            raise UnsafePath(f"{what} is an absolute path; meshes are read from the model's "
+                             "folder and package roots only (allow others with "
+                             "allow_paths=True, --allow-paths)")
+        else:
+            confine((base_dir or Path(".")) / name, [base_dir or Path(".")], what)
+
+
 def read_text(path: str | Path, what: str = "file",
               error: type[PinflexError] = UnreadableFile) -> str:
     """The UTF-8 text of an input file, or ``error`` (:class:`UnreadableFile`) saying why not."""

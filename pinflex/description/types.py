@@ -227,6 +227,8 @@ class RobotDescription:
         bodies: Rigid bodies on links: ``<pinflex:body>`` elements and the URDF inertia beam
             links keep (:mod:`pinflex.description.link_inertia`).
         inertia_notes: One line per flexible link saying what it kept of its URDF inertia.
+        allow_paths: Whether files named by the description (meshes) may be read from
+            outside its folder and the package roots.
     """
 
     name: str
@@ -246,6 +248,7 @@ class RobotDescription:
     values: dict[str, float] = field(default_factory=dict)
     bodies: tuple[RigidBody, ...] = ()
     inertia_notes: tuple[str, ...] = ()
+    allow_paths: bool = False
 
     def with_values(self, values: dict[str, float]) -> RobotDescription:
         """The same description with parameter values overridden (re-read from its text).
@@ -264,7 +267,8 @@ class RobotDescription:
         from pinflex.description.parse import parse
 
         merged = {**self.values, **{k: float(v) for k, v in values.items()}}
-        return parse(self.urdf_xml, base_dir=self.base_dir, values=merged)
+        return parse(self.urdf_xml, base_dir=self.base_dir, values=merged,
+                     allow_paths=self.allow_paths)
 
     def require_link(self, name: str) -> None:
         """Raise :class:`LinkNotFound` unless ``name`` is a link.

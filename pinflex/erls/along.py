@@ -240,6 +240,10 @@ def modes_along(
     from pinflex.trajectory.cartesian import check_joint_limits
 
     Q = trajectory_for(arm, trajectory)
+    from pinflex.resources import check_poses
+
+    check_poses(Q.shape[0], arm.ndof, "the frequencies along the trajectory",
+                "resample the trajectory more coarsely")
     if check_limits is not None:
         check_joint_limits(
             arm, Trajectory(trajectory.times_s, Q, arm.joint_names), on_violation=check_limits

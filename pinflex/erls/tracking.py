@@ -85,6 +85,7 @@ from scipy.optimize import linear_sum_assignment
 from pinflex.erls.eigenpairs import PoseMap, eigenpairs, solver_eigenpairs
 from pinflex.exceptions import ConfigurationError
 from pinflex.progress import ProgressBar
+from pinflex.resources import check_poses
 
 __all__ = [
     "ModeEvent",
@@ -594,7 +595,10 @@ def _lead_in(model, Q, Y, start, q0, y0, n, mac_min, check_bounds, solver):
     span = np.array([max(d.upper - d.lower, 1e-12) if np.isfinite(d.upper - d.lower) else
                      max(abs(d.nominal), 1.0) for d in model.design])
     dy = float(np.max(np.abs(ys - y0) / span)) if model.ny else 0.0
-    nsteps = int(np.ceil(max(dq / step if step > 0 else 0.0, 20.0 * dy, 1.0)))
+    nsteps = float(np.ceil(max(dq / step if step > 0 else 0.0, 20.0 * dy, 1.0)))
+    nsteps = check_poses(nsteps, model.ndof, f"the walk of {dq:.3g} from the expansion point "
+                         "to the trajectory's first sample (in steps of the trajectory's)",
+                         "expand at a point nearer the trajectory (q0)", maximum=20_000)
     t = np.linspace(0.0, 1.0, nsteps + 1)[:, None]
     Qp = q0 + t * (qs - q0)
     Yp = y0 + t * (ys - y0)

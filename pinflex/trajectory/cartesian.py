@@ -25,6 +25,11 @@ from numpy.typing import ArrayLike
 from pinflex.exceptions import IKNotConverged, InvalidPath, LinkNotFound, TrajectoryWarning
 from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory, solve_ik
+from pinflex.validation import require_count, require_number
+
+#: Most samples of a workspace path: each is an inverse-kinematics solve (a few ms), and
+#: each later costs a modal analysis; 20,000 samples already take minutes.
+MAX_PATH_SAMPLES = 20_000
 
 
 def sample_polyline(
@@ -36,10 +41,10 @@ def sample_polyline(
         raise InvalidPath(f"waypoints must have shape (k, 3) with k >= 2, got {pts.shape}")
     if not np.all(np.isfinite(pts)):
         raise InvalidPath("waypoints must be finite")
-    if int(n_samples) < 2:
-        raise InvalidPath(f"n_samples must be >= 2, got {n_samples}")
-    if not duration_s > 0.0:
-        raise InvalidPath(f"duration_s must be positive, got {duration_s!r}")
+    n_samples = require_count(n_samples, "n_samples (path samples)", minimum=2,
+                              maximum=MAX_PATH_SAMPLES, error=InvalidPath)
+    duration_s = require_number(duration_s, "duration_s", gt=0.0, le=1e6, unit="s",
+                                error=InvalidPath)
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     if np.any(seg <= 1e-12):
         k = int(np.argmin(seg))
