@@ -181,3 +181,17 @@ def check_poses(n_poses: float, ndof: int, what: str, fix: str,
                  f"{what} ({n} poses of {ndof} dof)", fix)
     warn_time(n * seconds, f"{what} ({n} modal analyses of {ndof} dof)")
     return n
+
+
+def check_series(n_samples: float, width: int, what: str, fix: str) -> int:
+    """Bound a time series of ``n_samples`` rows of ``width`` numbers before it is made.
+
+    Raises:
+        ResourceLimitExceeded: Its memory estimate exceeds the limit (:func:`check_memory`),
+            with the sample count in the message.
+    """
+    if not n_samples <= 2**53:
+        raise ResourceLimitExceeded(f"{what} would have {n_samples:.3g} samples; {fix}")
+    check_memory(float(n_samples) * max(int(width), 1) * _BYTES,
+                 f"{what} ({n_samples:.3g} samples of {width} numbers)", fix)
+    return int(n_samples)

@@ -459,6 +459,14 @@ TWO_LINK = ROOT / "urdf" / "two_link.urdf"
 _CACHE: dict = {}
 
 
+def _model_of(path):
+    from pinflex.erls import FlexibleModel
+
+    model = FlexibleModel(path, planar=True)
+    model.frequencies([1.8, 5.3], n_modes=2)
+    return model
+
+
 def _model():
     if "model" not in _CACHE:
         from pinflex.erls import FlexibleModel
@@ -591,6 +599,93 @@ def _cli_argv(rng: random.Random, tmp: Path) -> list[str]:
     return [w.format(urdf=str(TWO_LINK), num=num, tmp=str(tmp), long=long) for w in case]
 
 
+_URDF_STRUCTURE = [
+    ("duplicate link", lambda t: t.replace('<link name="tool"/>',
+                                            '<link name="tool"/><link name="tool"/>', 1)),
+    ("two parents", lambda t: t.replace('<child link="tool"/>', '<child link="link2"/>', 1)),
+    ("floating joint", lambda t: t.replace('type="revolute"', 'type="floating"', 1)),
+    ("planar joint", lambda t: t.replace('type="revolute"', 'type="planar"', 1)),
+    ("continuous joint", lambda t: t.replace('type="revolute"', 'type="continuous"', 1)),
+    ("zero axis", lambda t: t.replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>', 1)),
+    ("nan axis", lambda t: t.replace('<axis xyz="0 0 1"/>', '<axis xyz="0 nan 1"/>', 1)),
+    ("long axis", lambda t: t.replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1e300"/>', 1)),
+    ("no root", lambda t: t.replace('<parent link="base"/>', '<parent link="tool"/>', 1)),
+    ("flexible root", lambda t: t.replace('<pinflex:flexible link="link1"',
+                                           '<pinflex:flexible link="base"', 1)),
+    ("flexible twice", lambda t: t.replace('<pinflex:flexible link="link2"',
+                                            '<pinflex:flexible link="link1"', 1)),
+    ("point mass on no link", lambda t: t.replace('link="link1" xyz="0.6 0 0"',
+                                                   'link="nolink" xyz="0.6 0 0"', 1)),
+    ("mass 1e300", lambda t: t.replace('<mass value="0.855"/>', '<mass value="1e300"/>', 1)),
+    ("inertia -1", lambda t: t.replace('izz="0.01443"', 'izz="-1"', 1)),
+    ("rpy 1e300", lambda t: t.replace('<origin xyz="0.6 0 0"/>',
+                                       '<origin xyz="0.6 0 0" rpy="0 0 1e300"/>', 1)),
+    ("limit nan", lambda t: t.replace('lower="-6.2832"', 'lower="nan"', 1)),
+    ("tip zero", lambda t: t.replace('elements="4" normal="0 0 1"',
+                                      'elements="4" tip="0 0 0" normal="0 0 1"', 1)),
+    ("normal along beam", lambda t: t.replace('elements="4" normal="0 0 1"',
+                                               'elements="4" normal="1 0 0"', 1)),
+    ("pinflex joint on fixed", lambda t: t.replace(
+        '<pinflex:coordinates', '<pinflex:joint name="tool_joint" stiffness="10"/>\n'
+        '<pinflex:coordinates', 1)),
+    ("spring and lock", lambda t: t.replace(
+        '<pinflex:coordinates', '<pinflex:joint name="q2" stiffness="10" locked="true"/>\n'
+        '<pinflex:coordinates', 1)),
+    ("spring 1e300", lambda t: t.replace(
+        '<pinflex:coordinates', '<pinflex:joint name="q2" stiffness="1e300"/>\n'
+        '<pinflex:coordinates', 1)),
+    ("two coordinates", lambda t: t.replace(
+        '<pinflex:coordinates convention="absolute"/>',
+        '<pinflex:coordinates convention="absolute"/><pinflex:coordinates '
+        'convention="relative"/>', 1)),
+    ("empty robot", lambda t: '<robot name="x" xmlns:pinflex="urn:pinflex:urdf:1"/>'),
+    ("entity", lambda t: '<!DOCTYPE r [<!ENTITY a "aaaa">]>' + t),
+    ("deep nesting", lambda t: t.replace("<link name=\"tool\"/>",
+                                          "<link name=\"tool\">" + "<visual>" * 500
+                                          + "</visual>" * 500 + "</link>", 1)),
+]
+
+_BASES = ["../two_link.urdf", "/etc/hostname", "file:///etc/hostname", "", "sub",
+          "example-robot-data:../../../../etc/hostname", "example-robot-data:nothing.urdf",
+          "example-robot-data:ur_description/urdf/ur5_robot.urdf", "x" * 400, "two_link.urdf",
+          "bin.urdf"]
+
+
+def _overlay_base(rng: random.Random, folder: Path) -> tuple[str, Path, bool]:
+    """``(label, overlay path, must_refuse)``: an overlay whose base tests confinement."""
+    base = rng.choice(_BASES)
+    inner = folder / "inner"
+    (inner / "sub").mkdir(parents=True, exist_ok=True)
+    (inner / "two_link.urdf").write_text(TWO_LINK.read_text())
+    (folder / "two_link.urdf").write_text(TWO_LINK.read_text())
+    (inner / "bin.urdf").write_bytes(b"\x00\x01" * 10)
+    flex = ('<pinflex:flexible link="link1" elements="2" normal="0 0 1">'
+            '<pinflex:material E="69e9" linear_density="1.9"/>'
+            '<pinflex:section A="7.07e-4" Iy="3.97e-8" Iz="3.97e-8" J="7.94e-8"/>'
+            '</pinflex:flexible>')
+    if "ur5" in base:
+        flex = flex.replace("link1", "upper_arm_link").replace('normal="0 0 1"', "")
+    path = inner / "o.xml"
+    path.write_text(f'<pinflex:overlay xmlns:pinflex="urn:pinflex:urdf:1" base="{base}">'
+                    f"{flex}</pinflex:overlay>")
+    ok = base in ("two_link.urdf", "example-robot-data:ur_description/urdf/ur5_robot.urdf")
+    return f"base={base[:40]!r}", path, not ok
+
+
+_SWEEPS = ["targets.0.freq_hz=185,1_0", "targets.0.freq_hz=nan", "expansion.y0.m9=0.1",
+           "expansion.y0.m1=0.3", "options.baseline.mx=0.0", "values.nope=1.0",
+           "targets.0.mode=99", "targets.5.freq_hz=190", "expansion.order=40",
+           "expansion.order=2.5", "planar=maybe", "joints=stiff", "expansion.q0=[1.0]",
+           "constraints.mass_budget_kg=\u0661", "targets.0.freq_hz=190,190",
+           "expansion.quantity=hz", "robot=builtin:nothing.urdf"]
+
+
+def _sweep_case(option: str):
+    from pinflex.batch.sweep import parse_sweeps, plan_cases
+
+    return plan_cases(ROOT / "examples" / "benchmark_a.toml", parse_sweeps([option]))
+
+
 def run_families(n_variants: int = 600, seed: int = 20261202, cli: int = 40) -> dict:
     """Fuzz the further families (see the module docstring); return the counts per family.
 
@@ -696,6 +791,23 @@ def run_families(n_variants: int = 600, seed: int = 20261202, cli: int = 40) -> 
             for label, call in _api_calls(rng):
                 outcome("api_types", label, call, True)
                 made += 1
+        # URDF structure
+        for k in range(per // 2):
+            label, change = rng.choice(_URDF_STRUCTURE)
+            path = tmp / f"st{k}.urdf"
+            path.write_text(change(texts[TWO_LINK]))
+            status, _ = outcome("urdf_structure", label,
+                                lambda p=path: _model_of(p), label not in (
+                                    "continuous joint", "long axis"))
+        # overlay bases
+        for k in range(per // 4):
+            label, path, refuse = _overlay_base(rng, tmp / f"ob{k}")
+            outcome("overlay_base", label, lambda p=path: load(p), refuse)
+        # sweeps
+        for k in range(per // 4):
+            option = rng.choice(_SWEEPS)
+            outcome("sweep", option, lambda o=option: _sweep_case(o),
+                    option != "targets.0.freq_hz=190,190")
         # command lines
         from pinflex.cli import main as cli_main
 

@@ -201,6 +201,9 @@ def _api_cases():
          ConfigurationError),
         ("values={'m1': '0.2'}", lambda: FlexibleModel(TWO_LINK, values={"m1": "0.2"}),
          ConfigurationError),
+        ("values={'D_upper': None} (a parameter)",
+         lambda: FlexibleModel(TWO_LINK.with_name("ur5_tubes.xml"), values={"D_upper": None}),
+         ConfigurationError),
         ("Material(E=None)", lambda: Material(E=None, density=2700.0), InvalidBeamProperty),
         ("Material(E='70e9')", lambda: Material(E="70e9", density=2700.0), InvalidBeamProperty),
         ("frequencies complex", lambda: model.frequencies(np.array([1.8 + 1j, 5.3])),
@@ -357,3 +360,135 @@ def test_the_shipped_files_still_load_unchanged():
         for path in sorted((ROOT / "urdf").iterdir()):
             load(path)
     _ = load_toml((ROOT / "examples" / "benchmark_a.toml").read_text(), "example")
+
+
+# --------------------------------------------------------------------- paths and outputs
+def test_overlay_bases_and_meshes_are_confined(tmp_path, monkeypatch):
+    """An overlay's base and the meshes of the visuals stay in the model's folder and the
+    package roots (absolute, file:// and .. names refused) unless allowed explicitly."""
+    from pinflex.description import load
+    from pinflex.description.source import check_mesh_paths
+    from pinflex.exceptions import UnsafePath
+
+    inner = tmp_path / "inner"
+    inner.mkdir()
+    (tmp_path / "robot.urdf").write_text(BASE)
+    (inner / "robot.urdf").write_text(BASE)
+    overlay = inner / "o.xml"
+    for base, ok in (("robot.urdf", True), ("../robot.urdf", False), (str(TWO_LINK), False),
+                     (f"file://{TWO_LINK}", False),
+                     ("example-robot-data:../../../../etc/hostname", False)):
+        overlay.write_text(f'<pinflex:overlay xmlns:pinflex="urn:pinflex:urdf:1" '
+                           f'base="{base}"/>')
+        if ok:
+            load(overlay)
+        else:
+            with pytest.raises(UnsafePath, match="outside the model's folder"):
+                load(overlay)
+    overlay.write_text('<pinflex:overlay xmlns:pinflex="urn:pinflex:urdf:1" '
+                       'base="../robot.urdf"/>')
+    assert load(overlay, allow_paths=True).allow_paths
+    outside = tmp_path / "ros"
+    (outside / "nopkg").mkdir(parents=True)
+    (outside / "nopkg" / "x.stl").write_text("solid x")
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(outside))  # searched by Pinocchio, not a root
+    for name in ("../x.stl", "/etc/x.stl", "file:///etc/x.stl", "package://nopkg/x.stl"):
+        text = BASE.replace('<cylinder radius="0.015" length="0.6"/>',
+                            f'<mesh filename="{name}"/>', 1)
+        with pytest.raises(UnsafePath):
+            check_mesh_paths(text, inner, [inner])
+        check_mesh_paths(text, inner, [inner], allow=True)
+    for name in ("meshes/x.stl", "package://missing/x.stl"):  # inside, or found nowhere
+        check_mesh_paths(BASE.replace('<cylinder radius="0.015" length="0.6"/>',
+                                      f'<mesh filename="{name}"/>', 1), inner, [inner])
+
+
+def test_stale_temporary_files_are_cleaned_on_the_next_write(tmp_path):
+    """A killed write leaves .NAME.PID-XXXX.tmp; the next write of NAME removes it if that
+    process is gone, and leaves the files of running writers alone."""
+    import os
+    import subprocess
+    import sys
+
+    from pinflex.outputs import write_text
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    stale = tmp_path / f".out.json.{dead}-abcd.tmp"
+    stale.write_text("partial")
+    mine = tmp_path / f".out.json.{os.getpid()}-efgh.tmp"
+    mine.write_text("in progress")
+    old = tmp_path / ".out.json.legacy.tmp"
+    old.write_text("partial")
+    os.utime(old, (0, 0))
+    other = tmp_path / ".other.json.1-x.tmp"
+    other.write_text("another target")
+    write_text(tmp_path / "out.json", "{}")
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted(["out.json", mine.name, other.name]), left
+
+
+def test_store_under_a_file_is_a_named_error(tmp_path, capsys):
+    """`--store FILE/s.db` was a NotADirectoryError (exit 1)."""
+    from conftest import ROOT
+
+    from pinflex.cli import main
+
+    (tmp_path / "file").write_text("x")
+    assert main(["batch", "assign", str(ROOT / "examples" / "benchmark_a.toml"), "--store",
+                 str(tmp_path / "file" / "s.db"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "is a file, not a folder" in err and err.count("\n") == 1
+
+
+def test_sweep_with_a_bad_design_name_fails_the_command(tmp_path, capsys):
+    """It was stored as a failed row with exit 0; now the command refuses before any task."""
+    from conftest import ROOT
+
+    from pinflex.cli import main
+
+    store = tmp_path / "s.db"
+    assert main(["batch", "assign", str(ROOT / "examples" / "benchmark_a.toml"), "--sweep",
+                 "expansion.y0.m9=0.1", "--store", str(store), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "'m9'" in err.replace('"', "'") or "m9" in err
+    assert "is not a design variable" in err and err.count("\n") == 1
+    assert not store.exists()
+
+
+def test_urdfdom_messages_do_not_leak(tmp_path, capfd):
+    """A URDF Pinocchio refuses (a limit without effort) is one line on stderr, naming
+    urdfdom's reason; urdfdom's own multi-line report is kept off the terminal."""
+    from pinflex.cli import main
+
+    path = tmp_path / "r.urdf"
+    path.write_text(BASE.replace(' effort="100" velocity="10"', "", 1))
+    assert main(["modes", str(path)]) == 2
+    err = capfd.readouterr().err
+    assert err.count("\n") == 1 and "limit has no effort" in err, err
+
+
+def test_simulation_output_size_is_bounded_before_work():
+    """sample_hz x time within their bounds can still exceed memory: refused with the
+    estimate (sample_hz = 1e12 asked for 5.5 TiB before)."""
+    from pinflex.dynamics.study import check_simulation_size, parse_simulation_table
+    from pinflex.exceptions import ResourceLimitExceeded
+
+    big = parse_simulation_table({"sample_hz": 1e6, "after_s": 1e4})
+    with pytest.raises(ResourceLimitExceeded, match="1e\\+10 output samples"):
+        check_simulation_size(big, 1.5, 44, 2)
+    check_simulation_size(parse_simulation_table({}), 1.5, 44, 2)
+
+
+def test_walk_from_a_far_expansion_point_is_bounded():
+    """q0 = [1000, 1000] ran past 120 s ([1e6, 1e6]: MemoryError): refused with the count."""
+    from pinflex.assignment.study import user_trajectory
+    from pinflex.erls import FlexibleModel
+    from pinflex.exceptions import ResourceLimitExceeded
+    from pinflex.tracking import track_modes
+
+    model = FlexibleModel(TWO_LINK, planar=True)
+    traj = user_trajectory(model, "benchmark_a")
+    for q0 in ([1000.0, 1000.0], [1e6, 1e6]):
+        with pytest.raises(ResourceLimitExceeded, match="modal analyses"):
+            track_modes(model, traj.q, reference=(q0, None))

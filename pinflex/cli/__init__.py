@@ -125,6 +125,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser(chosen_subcommand(words)).parse_args(words)
     except SystemExit as exc:  # usage errors (one line printed), --help, --version
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    import warnings
+
+    shown = warnings.showwarning
+    if not args.debug:
+        warnings.showwarning = _one_line_warning
     try:
         return int(args.func(args) or 0)
     except PinflexError as exc:
@@ -150,3 +155,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"pinflex: internal error: {type(exc).__name__}: {exc} "
               "(rerun with --debug for the traceback)", file=sys.stderr)
         return 1
+    finally:
+        warnings.showwarning = shown
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line on stderr, ``pinflex: warning: Category: message``."""
+    text = " ".join(str(message).split())
+    print(f"pinflex: warning: {category.__name__}: {text}", file=sys.stderr)

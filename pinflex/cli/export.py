@@ -51,8 +51,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     from pinflex.erls import FlexibleModel
     from pinflex.native.export import linear_model, save_linear_model
 
-    model = FlexibleModel(robot_description(args), planar=args.planar, values=parse_values(args.set),
-                          joints=args.joints)
+    model = FlexibleModel(robot_description(args), planar=args.planar,
+                          values=parse_values(args.set), joints=args.joints)
     times = None
     if args.trajectory:
         from pinflex.erls.along import trajectory_for

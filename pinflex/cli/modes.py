@@ -40,19 +40,21 @@ def add_parser(sub) -> None:
 def cmd_modes(args: argparse.Namespace) -> int:
     """Run ``pinflex modes``."""
     from pinflex.erls import FlexibleModel
+    from pinflex.exceptions import ConfigurationError
 
-    model = FlexibleModel(robot_description(args), planar=args.planar, values=parse_values(args.set),
-                          joints=args.joints)
+    if args.tol is not None and not 0.0 < args.tol < 1.0:
+        raise ConfigurationError(f"--tol {args.tol:g}: give a relative tolerance in (0, 1)")
+    model = FlexibleModel(robot_description(args), planar=args.planar,
+                          values=parse_values(args.set), joints=args.joints)
+    if args.modes is not None and args.modes > model.n_elastic:
+        raise ConfigurationError(f"--modes {args.modes}: the model has elastic modes "
+                                 f"1..{model.n_elastic}")
     if args.trajectory is not None:
         if args.tol is not None:
-            from pinflex.exceptions import ConfigurationError
-
             raise ConfigurationError("--tol picks the elements at one pose (--q); it does not "
                                      "go with --trajectory")
         return _along(model, args)
     if args.csv or args.png is not None:
-        from pinflex.exceptions import ConfigurationError
-
         raise ConfigurationError("--csv and --png go with --trajectory")
     q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
     fidelity = None

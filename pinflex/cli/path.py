@@ -54,7 +54,8 @@ def cmd_path(args: argparse.Namespace) -> int:
     from pinflex.exceptions import ConfigurationError
     from pinflex.trajectory.cartesian import path_from_spec
 
-    model = FlexibleModel(robot_description(args), values=parse_values(args.set), joints=args.joints)
+    model = FlexibleModel(robot_description(args), values=parse_values(args.set),
+                          joints=args.joints)
     orientation: object = args.orientation
     if orientation not in ("free", "keep"):
         try:

@@ -59,9 +59,11 @@ def cmd_view(args: argparse.Namespace) -> int:
     for name, value in (("--amplitude", args.amplitude), ("--serve-seconds", args.serve_seconds)):
         if value is not None and not (np.isfinite(value) and value > 0.0):
             raise ConfigurationError(f"{name} {value} must be a positive finite number")
-    model = FlexibleModel(robot_description(args), planar=args.planar, values=parse_values(args.set),
-                          joints=args.joints)
+    model = FlexibleModel(robot_description(args), planar=args.planar,
+                          values=parse_values(args.set), joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)
+    if not 1 <= args.modes:
+        raise ConfigurationError(f"--modes {args.modes}: give at least 1")
     if not 1 <= args.mode <= model.n_elastic:
         from pinflex.exceptions import ConfigurationError
 

@@ -448,6 +448,21 @@ def check_urdf(doc: XmlDocument, flexible_links: set[str], *, upstream: bool = F
                         f"{vals['upper']:g}", attr="lower")
         if "child" in ends and "parent" in ends:
             parent_of[ends["child"]] = (ends["parent"], jtype in MOVING_JOINTS)
+    roots = [name for name in links if name not in parent_of]
+    if len(roots) == 1:
+        children: dict[str, list[str]] = {}
+        for child, (parent, _) in parent_of.items():
+            children.setdefault(parent, []).append(child)
+        reached, todo = {roots[0]}, [roots[0]]
+        while todo:
+            for child in children.get(todo.pop(), ()):
+                if child not in reached:
+                    reached.add(child)
+                    todo.append(child)
+        cut = [name for name in links if name not in reached]
+        if cut:
+            add(root, f"links {', '.join(cut[:5])}{' ...' if len(cut) > 5 else ''} are not "
+                f"connected to the root link '{roots[0]}': their joints form a loop")
     numbers_of = {name: _urdf_numbers(el, ("link",), f"link '{name}'", add)
                   for name, el in links.items()}
     for name, el in links.items():

@@ -67,7 +67,12 @@ def resolve_base(base: str, folder: Path, *, allow_paths: bool = False) -> Path:
         if base.startswith("file://"):
             base = base[len("file://"):]
         path = confine(folder / base, [folder], "the overlay's base URDF", allow=allow_paths)
-    if not path.is_file():
+    try:
+        found = path.is_file()
+    except OSError as exc:
+        raise InvalidDescription(f"the overlay's base URDF cannot be read: {exc.strerror}"
+                                 ) from None
+    if not found:
         raise InvalidDescription(f"the overlay's base URDF '{base}' was not found at '{path}'")
     return path
 

@@ -139,6 +139,13 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
                   allow_paths)
 
 
+def _reparse(urdf_xml: str, base_dir: Path | None, source: str, plausibility: str,
+             allow_paths: bool, values: dict) -> RobotDescription:
+    """The description of the same text with other parameter values (its ``reparse``)."""
+    return parse(urdf_xml, base_dir=base_dir, values=values, source=source,
+                 plausibility=plausibility, allow_paths=allow_paths)
+
+
 def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
            values: dict[str, float] | None, source: str, checked: Checked,
            plausibility: str, allow_paths: bool = False) -> RobotDescription:
@@ -217,6 +224,8 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
         bodies=tuple(bodies),
         inertia_notes=tuple(notes),
         allow_paths=bool(allow_paths),
+        reparse=functools.partial(_reparse, urdf_xml, base_dir, source, plausibility,
+                                  bool(allow_paths)),
     )
     check_physical(desc, checked, source, plausibility=plausibility)
     return desc

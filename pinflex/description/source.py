@@ -127,17 +127,28 @@ def check_mesh_paths(urdf_xml: str, base_dir: Path | None, package_dirs, *,
         if name.startswith("package://"):
             rest = name[len("package://"):]
             found = [r / rest for r in roots if (r / rest).exists()]
-            if not found:
-                raise UnsafePath(f"{what} is in no package root ({', '.join(map(str, roots))});"
-                                 " install the package or allow other paths (--allow-paths)")
             for cand in found:
                 confine(cand, roots, what)
+            if not found and _elsewhere(rest):
+                raise UnsafePath(f"{what} is in no package root ({', '.join(map(str, roots))}) "
+                                 "but in a folder of ROS_PACKAGE_PATH/AMENT_PREFIX_PATH; allow "
+                                 "it explicitly (allow_paths=True, --allow-paths)")
         elif name.startswith("file://") or Path(name).is_absolute():
             raise UnsafePath(f"{what} is an absolute path; meshes are read from the model's "
                              "folder and package roots only (allow others with "
                              "allow_paths=True, --allow-paths)")
         else:
             confine((base_dir or Path(".")) / name, [base_dir or Path(".")], what)
+
+
+def _elsewhere(rest: str) -> bool:
+    """Whether ``package://rest`` exists under a ROS package path (which Pinocchio searches)."""
+    for var in ("ROS_PACKAGE_PATH", "AMENT_PREFIX_PATH"):
+        for folder in os.environ.get(var, "").split(os.pathsep):
+            if folder and ((Path(folder) / rest).exists()
+                           or (Path(folder) / "share" / rest).exists()):
+                return True
+    return False
 
 
 def read_text(path: str | Path, what: str = "file",

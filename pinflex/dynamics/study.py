@@ -120,13 +120,12 @@ def check_simulation_size(settings: SimulationSettings, duration_s: float, ndof:
         ResourceLimitExceeded: The output series would not fit in the memory limit
             (:func:`pinflex.resources.check_memory`).
     """
-    from pinflex.resources import check_memory
+    from pinflex.resources import check_series
 
     samples = (float(duration_s) + settings.after_s) * settings.sample_hz + 1
     # per sample: time, elastic coordinates, their rates, joint values and rates, the
-    # output point (position, velocity); two designs are simulated one after the other
-    per_sample = 8.0 * (1 + 2 * ndof + 2 * nv + 6)
-    check_memory(samples * per_sample,
+    # output point (position, velocity)
+    check_series(samples, 1 + 2 * ndof + 2 * nv + 6,
                  f"a simulation of {duration_s + settings.after_s:g} s at {settings.sample_hz:g} "
                  f"Hz ({samples:.3g} output samples of {ndof} coordinates)",
                  "lower sample_hz or after_s in [simulation]")
