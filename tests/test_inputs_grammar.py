@@ -485,7 +485,7 @@ def test_walk_from_a_far_expansion_point_is_bounded():
     from pinflex.assignment.study import user_trajectory
     from pinflex.erls import FlexibleModel
     from pinflex.exceptions import ResourceLimitExceeded
-    from pinflex.tracking import track_modes
+    from pinflex.erls.tracking import track_modes
 
     model = FlexibleModel(TWO_LINK, planar=True)
     traj = user_trajectory(model, "benchmark_a")
