@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -93,8 +94,18 @@ def atomic_path(path: str | Path, what: str = "output file") -> Iterator[Path]:
         OutputError: ``path`` is a folder, its folder cannot be created or written.
     """
     path = _target(path, what)
+    if not str(path) or str(path) == ".":
+        raise OutputError(f"{what}: the file name is empty")
     if path.is_dir():
         raise OutputError(f"{what} '{path}' is a folder; give a file name")
+    try:
+        st = path.lstat()
+    except OSError:
+        st = None
+    if st is not None and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+        # a device, pipe or socket: replacing it would destroy it (e.g. /dev/full as root)
+        raise OutputError(f"{what} '{path}' is a device, pipe or socket, not a file; "
+                          "give the name of a regular file")
     folder = output_dir(path.parent if str(path.parent) else Path("."), "folder")
     clean_stale(folder, path.name)
     try:

@@ -119,6 +119,27 @@ def check_modal(ndof: int, n_poses: int = 1, what: str = "the modal analysis") -
                                                  else ""))
 
 
+def check_model_size(elements, nv: int, planar: bool, what: str) -> None:
+    """Bound a model's assembly and modal analysis before any matrix is built.
+
+    Args:
+        elements: Element count of each flexible link.
+        nv: Rigid joint count.
+        planar: Whether the model keeps 3 dof per node (else 6).
+        what: The model, for the message.
+
+    The model has at most ``nv + sum k e`` dof (``k`` = 3 or 6 per node); its modal analysis
+    is bounded by :func:`modal_estimate`. Each beam is first assembled densely on its
+    ``6 (e + 1)`` node dof (three such matrices at once), which bounds the longest link.
+    """
+    k = 3 if planar else 6
+    ndof = int(nv) + sum(k * int(e) for e in elements)
+    line = max((6 * (int(e) + 1) for e in elements), default=0)
+    nbytes = max(modal_estimate(ndof)[0], 3.0 * line * line * _BYTES)
+    check_memory(nbytes, f"{what} ({ndof} dof, {max(elements, default=0)} elements on its "
+                 "longest link)", "use fewer elements per link")
+
+
 def taylor_estimate(nvars: int, order: int, ndof: int, ndesign: int = 0) -> tuple[float, float]:
     """``(bytes, seconds)`` of exact Taylor coefficients of M and K (see the module)."""
     ncoef = math.comb(nvars + order, order)

@@ -326,6 +326,9 @@ def load_toml(text: str, source: str, error: type[PinflexError] = ConfigurationE
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise error(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:  # tomllib parses nested arrays and inline tables recursively
+        raise error(f"{source}: arrays or inline tables nested too deeply to be a study "
+                    "file") from None
 
 
 _TOML_TOKEN = re.compile(r"[+-]?[0-9][0-9A-Za-z_.:+\-]*", re.ASCII)

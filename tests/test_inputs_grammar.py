@@ -492,3 +492,24 @@ def test_walk_from_a_far_expansion_point_is_bounded():
     for q0 in ([1000.0, 1000.0], [1e6, 1e6]):
         with pytest.raises(ResourceLimitExceeded, match="modal analyses"):
             track_modes(model, traj.q, reference=(q0, None))
+
+
+def test_python_specifications_take_numbers_only():
+    """Beam/Mass/Material values went through float() and int(): "٣" elements, "1_0" masses
+    and design="no" (truthy) were accepted."""
+    from pinflex import Beam, Mass, Material
+    from pinflex.beam import solid_circle
+    from pinflex.exceptions import InvalidDescription
+
+    alu = Material(E=70e9, density=2700.0)
+    for elements in ("4", "\u0663", None, 2.5, True):
+        with pytest.raises(InvalidBeamProperty, match="Beam.elements"):
+            Beam(solid_circle(0.03), alu, elements=elements).element("l")
+    with pytest.raises(InvalidDescription, match="tip"):
+        Beam(solid_circle(0.03), alu, tip=("0.5", 0, 0)).element("l")
+    for kwargs in ({"mass": "0.2"}, {"mass": None}, {"mass": 0.2, "design": "no"},
+                   {"mass": 0.2, "xyz": (0, True, 0)}):
+        with pytest.raises(InvalidDescription):
+            Mass("l", **kwargs).element("m")
+    el = Mass("l", 0.2, design=True, lower=0.0).element("m")
+    assert "upper" not in el.attrib  # unbounded above: no attribute

@@ -32,6 +32,7 @@ import copy
 import hashlib
 import itertools
 import json
+import math
 import re
 import time
 import warnings
@@ -126,7 +127,17 @@ def parse_sweeps(options: list[str] | None) -> list[tuple[str, list]]:
 def sweep_cases(sweeps: list[tuple[str, list]]) -> list[dict]:
     """Cartesian product of the sweeps, first sweep slowest: a list of ``{key: value}``."""
     keys = [k for k, _ in sweeps]
+    count = math.prod(len(v) for _, v in sweeps)
+    if count > MAX_CASES:  # counted before any case is built or checked
+        sizes = " x ".join(str(len(v)) for _, v in sweeps)
+        raise InvalidSweep(f"--sweep gives {count} cases ({sizes}), more than the "
+                           f"{MAX_CASES} one batch may hold; split the sweep into several "
+                           "runs on the same --store")
     return [dict(zip(keys, combo)) for combo in itertools.product(*(v for _, v in sweeps))]
+
+
+#: Most cases of one ``pinflex batch assign`` (each is a full assignment).
+MAX_CASES = 10_000
 
 
 def _index(items: list, index: str, key: str) -> int:

@@ -125,6 +125,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser(chosen_subcommand(words)).parse_args(words)
     except SystemExit as exc:  # usage errors (one line printed), --help, --version
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    empty = [k for k, v in vars(args).items()
+             if v == "" or (isinstance(v, list) and "" in v)]
+    if empty:  # an empty file name, address or value is never meant
+        name = empty[0]
+        print(f"pinflex {args.command}: error: an empty value was given to "
+              f"{name if name in ('urdf', 'config', 'store') else '--' + name.replace('_', '-')}",
+              file=sys.stderr)
+        return 2
     import warnings
 
     shown = warnings.showwarning
@@ -142,6 +150,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print("pinflex: interrupted", file=sys.stderr)
         return 130
+    except MemoryError as exc:
+        if args.debug:
+            raise
+        # an allocation beyond this machine's memory that no estimate caught
+        print(f"pinflex: error: out of memory ({exc or 'MemoryError'}): the request is too "
+              "large for this machine; use fewer elements, samples, modes or poses",
+              file=sys.stderr)
+        return 2
     except BrokenPipeError:
         # the reader closed the pipe: not an error of ours; stop writing, also at exit
         import os

@@ -153,11 +153,14 @@ def cmd_assign(args: argparse.Namespace) -> int:
     for key in ("confirm_tol", "target_tol"):
         value = getattr(args, key)
         if value is not None:
-            if not value > 0:
+            from pinflex.assignment.study_schema import STUDY
+
+            top = STUDY["options"].keys[key].le  # the study key's bounds: (0, top]
+            if not 0 < value <= top:
                 from pinflex.exceptions import ConfigurationError
 
                 raise ConfigurationError(f"--{key.replace('_', '-')} {value}: give a positive "
-                                         "fraction")
+                                         f"fraction up to {top:g}")
             setattr(cfg, key, value)
     import sys
 

@@ -10,6 +10,7 @@ import numpy as np
 from pinflex.cli.common import (
     add_allow_paths,
     add_model_arguments,
+    joint_value,
     parse_values,
     robot_description,
 )
@@ -31,7 +32,7 @@ def add_parser(sub) -> None:
                    metavar=("X", "Y", "Z"), help="a waypoint [m] (repeat, in order)")
     p.add_argument("--relative", action="store_true",
                    help="waypoints are offsets from the frame at --q, which starts the path")
-    p.add_argument("--q", type=float, nargs="+", metavar="V",
+    p.add_argument("--q", type=joint_value, nargs="+", metavar="V",
                    help="start pose (IK initial guess), one value per joint (default zeros)")
     p.add_argument("--samples", type=int, default=50, help="number of samples (default 50)")
     p.add_argument("--duration", type=float, default=1.0, help="duration [s] (default 1)")

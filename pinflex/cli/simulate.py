@@ -167,6 +167,11 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Run ``pinflex simulate``."""
+    if not 0.0 <= args.exaggeration <= 1e6:
+        from pinflex.exceptions import ConfigurationError
+
+        raise ConfigurationError(f"--exaggeration {args.exaggeration:g}: give a factor from 0 "
+                                 "(no playback) to 1e6")
     t0 = time.perf_counter()
     reports, sims, settings, result = run_study(
         args.config, args.joints, parse_values(args.set) if args.set else None, args.tol,

@@ -56,14 +56,17 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     if args.html:
         check_file_target(args.html, "--html")
-    for name, value in (("--amplitude", args.amplitude), ("--serve-seconds", args.serve_seconds)):
-        if value is not None and not (np.isfinite(value) and value > 0.0):
-            raise ConfigurationError(f"{name} {value} must be a positive finite number")
+    for name, value, top in (("--amplitude", args.amplitude, 1e3),
+                             ("--serve-seconds", args.serve_seconds, 1e7)):
+        if value is not None and not (np.isfinite(value) and 0.0 < value <= top):
+            raise ConfigurationError(f"{name} {value} must be a positive number up to {top:g}"
+                                     + (" [m]" if name == "--amplitude" else " [s]"))
     model = FlexibleModel(robot_description(args), planar=args.planar,
                           values=parse_values(args.set), joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)
-    if not 1 <= args.modes:
-        raise ConfigurationError(f"--modes {args.modes}: give at least 1")
+    if not 1 <= args.modes <= model.n_elastic:
+        raise ConfigurationError(f"--modes {args.modes}: give 1 to {model.n_elastic} (the "
+                                 "model's elastic modes)")
     if not 1 <= args.mode <= model.n_elastic:
         from pinflex.exceptions import ConfigurationError
 

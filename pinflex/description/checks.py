@@ -220,6 +220,11 @@ class _Checker:
         for key, attr in spec.attrs.items():
             if attr.required and key not in el.attrib:
                 self.add(el, key, f"attribute '{key}' is missing")
+        text = "".join([el.text or "", *(child.tail or "" for child in el)]).strip()
+        if text:  # a value written as text (or CDATA) would be ignored
+            self.add(el, None, f"<pinflex:{local}> holds the text {text[:40]!r}, which pinflex "
+                     "ignores; annotations take their values as attributes only",
+                     UnknownElement)
         if spec.declares and isinstance(values.get(spec.declares), str):
             self.checked.declared.add(values[spec.declares])
 
@@ -482,6 +487,8 @@ def check_urdf(doc: XmlDocument, flexible_links: set[str], *, upstream: bool = F
                 attr="value")
         elif any(moments.get(k, 0.0) < 0.0 for k in ("ixx", "iyy", "izz")):
             add(inertia_el, f"link '{name}' has a negative principal moment of inertia")
+        elif used and moments:
+            _check_inertia(name, inertia_el, moments, upstream, add)
         if mass is None or not used:
             continue
         if mass == 0.0 and any(moments.values()):
@@ -496,6 +503,33 @@ def check_urdf(doc: XmlDocument, flexible_links: set[str], *, upstream: bool = F
     if raise_now:
         raise_problems(doc.source, problems, " in the URDF")
     return problems
+
+
+def _check_inertia(name: str, el, moments: dict, upstream: bool, add) -> None:
+    """A rigid body's inertia is positive semi-definite and its principal moments satisfy
+    the triangle inequality (``I1 <= I2 + I3``).
+
+    A tensor that is not positive semi-definite makes the mass matrix indefinite (every
+    eigenfrequency of the arm is then meaningless): refused, warned in an upstream URDF.
+    One that only breaks the triangle inequality belongs to no rigid body (common in upstream
+    files, harmless to the mass matrix): warned.
+    """
+    import numpy as np
+
+    g = {k: moments.get(k, 0.0) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    tensor = np.array([[g["ixx"], g["ixy"], g["ixz"]], [g["ixy"], g["iyy"], g["iyz"]],
+                       [g["ixz"], g["iyz"], g["izz"]]])
+    w = np.linalg.eigvalsh(tensor)
+    scale = float(np.abs(w).max())
+    principal = ", ".join(f"{v:.4g}" for v in w)
+    if w[0] < -1e-9 * scale:
+        add(el, f"link '{name}': its inertia is not positive semi-definite (principal moments "
+            f"{principal} kg m^2): the mass matrix would be indefinite; correct ixy, ixz, iyz "
+            "or the diagonal", warning=upstream)
+    elif w[2] > w[0] + w[1] + 1e-6 * scale:
+        add(el, f"link '{name}': its principal moments of inertia ({principal} kg m^2) break "
+            "the triangle inequality I3 <= I1 + I2 that every rigid body satisfies; check the "
+            "inertia", warning=True)
 
 
 def _moved(link: str, parent_of: dict[str, tuple[str, bool]]) -> bool:
@@ -595,5 +629,17 @@ def check_physical(desc, checked: Checked, source: str, *,
                 "and the area), not physical for a robot link", True)
         elif not 100.0 <= rho <= 23000.0:
             add(where, f"the material density is {rho:.4g} kg/m^3, unusual for a robot link",
+                False)
+    for p in desc.point_masses:
+        f = desc.flexible.get(p.link)
+        if f is None:
+            continue
+        length = f.length_m
+        s = float(p.xyz @ f.tip) / length  # axial station along the beam
+        if s < -0.01 * length or s > 1.01 * length:
+            add(f"<pinflex:point_mass name='{p.name}'>", f"the mass sits {s:.4g} m along the "
+                f"beam of link '{p.link}', which is {length:g} m long: it rides on the beam's "
+                f"{'root' if s < 0 else 'tip'} through a rigid lever of "
+                f"{abs(s if s < 0 else s - length):.3g} m; check xyz (link frame, metres)",
                 False)
     raise_problems(source, problems, " in the pinflex annotations")

@@ -56,7 +56,7 @@ _NS = "{" + NAMESPACE + "}"
 #: Most beam elements on one link. Dense modal analysis costs O(n^2) memory and O(n^3) time in
 #: the dof count n (6 per node in space, 3 in plane): 4096 elements on one spatial link are
 #: about 24,600 dof, 4.8 GB per matrix; the memory estimate of
-#: :func:`pinflex.resources.check_model_size` refuses such models before any assembly.
+#: :func:`pinflex.resources.check_model_size` refuses such models before any assembly
 MAX_ELEMENTS_PER_LINK = 4096
 
 #: Largest coordinate of a point or vector attribute [m]; the hard bounds of the other

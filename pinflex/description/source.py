@@ -165,16 +165,17 @@ def read_text(path: str | Path, what: str = "file",
         data = path.read_bytes()
     except OSError as exc:
         raise error(f"{what} '{path}' cannot be read: {exc.strerror}") from exc
-    return decode(data, str(path), error)
+    return decode(data, str(path), error, what)
 
 
-def decode(data: bytes, source: str, error: type[PinflexError] = UnreadableFile) -> str:
+def decode(data: bytes, source: str, error: type[PinflexError] = UnreadableFile,
+           what: str = "URDF") -> str:
     """UTF-8 text of ``data`` (BOM allowed); binary or other encodings refused."""
     nul = data.find(b"\x00")
     if nul >= 0:
         raise error(
             f"'{source}' contains NUL bytes (first at offset {nul}): it is a binary file, "
-            "not a URDF"
+            f"not a {what} (UTF-16 text is refused too: save it as UTF-8)"
         )
     try:
         return data.decode("utf-8-sig")

@@ -63,7 +63,7 @@ from pinflex.exceptions import (
     NoFlexibleLink,
 )
 from pinflex.linalg import skew
-from pinflex.resources import check_modal
+from pinflex.resources import check_modal, check_model_size
 from pinflex.validation import require_array, require_count
 
 
@@ -294,6 +294,8 @@ class FlexibleModel:
         if _reuse is not None:
             plan = _reuse.plan
         else:
+            check_model_size([f.elements for f in description.flexible.values()], self.nv,
+                             self.planar, f"the model of robot '{description.name}'")
             plan = build_plan(self)
             conditions = joint_conditions.layout(self, plan, joints)
             plan = replace(plan, conditions=conditions,

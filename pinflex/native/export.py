@@ -115,10 +115,11 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None,
     zeta = require_number(zeta, "zeta (a damping ratio, not a percentage)", ge=0.0, le=1.0)
     if rayleigh is not None:
         rayleigh = tuple(require_array(rayleigh, "rayleigh (alpha, beta)").tolist())
-        if len(rayleigh) != 2 or min(rayleigh) < 0.0:
+        if len(rayleigh) != 2 or min(rayleigh) < 0.0 or rayleigh[0] > 1e6 or \
+                rayleigh[1] > 1.0:  # beyond: damping ratios of 1e3 and more at any mode
             raise ConfigurationError(
-                f"rayleigh must be (alpha [1/s], beta [s]) with both finite and >= 0, got "
-                f"{rayleigh}")
+                f"rayleigh must be (alpha [1/s], beta [s]) with 0 <= alpha <= 1e6 and "
+                f"0 <= beta <= 1, got {rayleigh}")
     if torque_input not in ("motor", "generalized"):
         raise ConfigurationError(f"torque_input = {torque_input!r}: choose 'motor' (the "
                                  "actuator on both bodies of the joint) or 'generalized'")

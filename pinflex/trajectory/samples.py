@@ -88,8 +88,16 @@ class Trajectory:
         if t.size > 1 and not np.all(np.diff(t) > 0.0):
             k = int(np.argmin(np.diff(t)))
             raise InvalidTrajectory(
-                f"times_s must increase strictly; t[{k}] = {t[k]!r} >= t[{k + 1}] = {t[k + 1]!r}"
+                f"times_s must increase strictly; t[{k}] = {float(t[k])!r} >= "
+                f"t[{k + 1}] = {float(t[k + 1])!r}"
             )
+        big_t, big_q = np.abs(t) > MAX_TIME_S, np.any(np.abs(q) > MAX_JOINT_VALUE, axis=1)
+        if np.any(big_t):
+            raise InvalidTrajectory(f"times_s beyond {MAX_TIME_S:g} s at samples "
+                                    f"{_bad_rows(big_t)}: times are in seconds")
+        if np.any(big_q):
+            raise InvalidTrajectory(f"q beyond {MAX_JOINT_VALUE:g} (rad or m) at samples "
+                                    f"{_bad_rows(big_q)}: joint values are in radians or metres")
         given = self.joint_names
         if isinstance(given, str) or not all(isinstance(n, str) for n in given):
             raise InvalidTrajectory(f"joint_names must be a sequence of names, got {given!r}")
@@ -304,6 +312,12 @@ def in_model_order(model, trajectory: Trajectory) -> Trajectory:
 
 #: Most samples of a trajectory file (each sample costs a modal analysis of the arm).
 MAX_SAMPLES = 100_000
+
+#: Largest joint value of a trajectory [rad or m] (the bound of a study's ``q0`` too).
+MAX_JOINT_VALUE = 1e6
+
+#: Largest sample time [s] (about 30 years).
+MAX_TIME_S = 1e9
 
 
 def check_columns(names, joints, what: str) -> None:

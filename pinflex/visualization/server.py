@@ -100,6 +100,15 @@ class MeshcatServer:
         """
         if not isinstance(bind, str) or not bind or any(c.isspace() for c in bind):
             raise ViewerServerError(f"bind address {bind!r} is not an address")
+        if bind != "localhost":
+            import ipaddress
+
+            try:  # an IP address of this machine; host names would be resolved (slowly)
+                ipaddress.ip_address(bind)
+            except ValueError:
+                raise ViewerServerError(
+                    f"bind address {bind!r} is not an IP address (give one such as "
+                    "127.0.0.1, 0.0.0.0 or ::, or 'localhost')") from None
         # run by file name: the server process imports meshcat and tornado, not pinflex
         script = str(Path(__file__).with_name("meshcat_server.py"))
         args = [sys.executable, "-u", script, "--bind", bind]
