@@ -24,8 +24,15 @@ Further families (:func:`run_families`, each with its own rule of what must happ
   NaN, a string or a boolean: refused; in range: accepted;
 * ``api_types``: a public function called with an argument of a wrong type or value (None,
   strings, booleans, complex, masked and nested arrays, NaN): a ``PinflexError``;
-* ``cli``: a command line with a bad number, path or option value: exit status 2 and exactly
-  one line on stderr (never 1 or a traceback).
+* ``cli``: a command line with a bad number, path or option value, or a count or size beyond
+  its bound (workers, beams, starts, sweep cases, modes, amplitudes, joint values): exit
+  status 2 and exactly one line on stderr (never 1 or a traceback);
+* ``study_files``: one change of the shipped study (dates, huge or float integers, nested
+  arrays, wrong tables, devices and folders as files, duplicate keys, non-UTF-8): refused;
+* ``urdf_structure``: structural URDF changes (indefinite inertias, text inside annotations,
+  missing limits, parameter cycles, two robots, ...): refused, except the valid ones;
+* ``output_targets``: writing to a pipe, a device, a folder, an empty or too long name, or
+  under a file: OutputError (a device is never replaced).
 
 Run ``python tests/fuzz_inputs.py [--variants N] [--seed S] [--json]`` for the counts;
 ``tests/test_fuzz_inputs.py`` runs it in the default suite.
@@ -446,12 +453,23 @@ def _api_calls(rng: random.Random):
         ("linear_model(rayleigh)", lambda v: _export(model, rayleigh=(v, 0.0))),
         ("ErlsDynamics(gravity)", lambda v: _dynamics(model, gravity=[0.0, v, 0.0])),
         ("simulate_prescribed(damping)", lambda v: _simulate(model, damping=v)),
+        ("Beam(elements)", lambda v: _beam(elements=v)),
+        ("Beam(tip)", lambda v: _beam(tip=(v, 0.0, 0.0))),
+        ("Mass(mass)", lambda v: _mass(v)),
+        ("Mass(xyz)", lambda v: _mass(0.1, xyz=(0.0, v, 0.0))),
+        ("Mass(design)", lambda v: _mass(0.1, design=v)),
+        ("with_values(m1)", lambda v: model.with_values(m1=v)),
+        ("expand(order)", lambda v: _expand(model, order=v)),
+        ("expand(q0)", lambda v: _expand(model, q0=[v, 5.3])),
+        ("Trajectory(times)", lambda v: _trajectory_times(v)),
     ]
     legit = {"frequencies(y)": (None,), "evaluate(linear_in_design)": (True,),
+             "Mass(design)": (True,), "evaluate(tol)": (float("inf"),),  # inf: no check
              "frequencies(n_modes)": (None,),
              "FlexibleModel(planar)": (True,), "simulate_prescribed(damping)": (None,)}
     for label, call in calls:
-        v = rng.choice([b for b in bad if not any(b is ok for ok in legit.get(label, ()))])
+        v = rng.choice([b for b in bad if not any(
+            b is ok or (type(b) is float and b == ok) for ok in legit.get(label, ()))])
         yield f"{label} <- {type(v).__name__} {str(v)[:20]!r}", (lambda c=call, x=v: c(x))
 
 
@@ -489,6 +507,32 @@ def _trajectory(v):
     return Trajectory([0.0, 1.0], [[0.0, v], [0.0, 0.0]])
 
 
+def _beam(**kwargs):
+    from pinflex import Beam, Material
+    from pinflex.beam import solid_circle
+
+    return Beam(solid_circle(0.03), Material(E=69e9, linear_density=1.9),
+                **kwargs).element("link1")
+
+
+def _mass(mass, **kwargs):
+    from pinflex import Mass
+
+    return Mass("link1", mass, **kwargs).element("m9")
+
+
+def _expand(model, order=1, q0=(1.8, 5.3)):
+    from pinflex.parametric import expand
+
+    return expand(model, q0, order=order, modes=[1])
+
+
+def _trajectory_times(v):
+    from pinflex.trajectory import Trajectory
+
+    return Trajectory([0.0, v], [[0.0, 0.0], [0.0, 0.0]])
+
+
 def _export(model, **kwargs):
     from pinflex.native.export import linear_model
 
@@ -514,7 +558,8 @@ def _trajectory_csv(rng: random.Random, times, q) -> tuple[str, str, object]:
     names = ["q1", "q2"]
     kind = rng.choice(["permuted", "permuted", "unknown", "missing", "duplicate", "extra",
                        "misspelt", "cell_digits", "cell_separator", "cell_nan", "cell_empty",
-                       "ragged", "no_header", "time_not_first"])
+                       "ragged", "no_header", "time_not_first", "cell_huge", "time_huge",
+                       "time_back", "semicolons", "crlf"])
     header = ["t", *names]
     cols = [[repr(float(v)) for v in times], *[[repr(float(v)) for v in q[:, j]] for j in range(2)]]
     expected = q
@@ -552,9 +597,18 @@ def _trajectory_csv(rng: random.Random, times, q) -> tuple[str, str, object]:
             cell = "1_0"
         elif kind == "cell_nan":
             cell = rng.choice(["nan", "inf", "-inf", "1e400"])
+        elif kind == "cell_huge":
+            cell = rng.choice(["1e300", "-2e6", "1e7"])
         else:
             cell = ""
         cols[j][i] = cell
+        expected = None
+    elif kind == "time_huge":
+        cols[0][-1] = rng.choice(["1e300", "2e9"])
+        expected = None
+    elif kind == "time_back":
+        i = rng.randrange(1, len(times))
+        cols[0][i] = cols[0][i - 1]
         expected = None
     elif kind == "ragged":
         cols[1] = cols[1][:-1]
@@ -566,11 +620,15 @@ def _trajectory_csv(rng: random.Random, times, q) -> tuple[str, str, object]:
         header = [header[1], header[0], header[2]]
         cols = [cols[1], cols[0], cols[2]]
         expected = None
-    rows = [",".join(header)] if header else []
+    sep, end = ("\t" if kind == "semicolons" and rng.random() < 0.5 else
+                ";" if kind == "semicolons" else ","), "\r\n" if kind == "crlf" else "\n"
+    if kind == "semicolons":
+        expected = None
+    rows = [sep.join(header)] if header else []
     n = max(len(c) for c in cols)
     for i in range(n):
-        rows.append(",".join(c[i] for c in cols if i < len(c)))
-    return "trajectory_" + kind, "\n".join(rows) + "\n", expected
+        rows.append(sep.join(c[i] for c in cols if i < len(c)))
+    return "trajectory_" + kind, end.join(rows) + end, expected
 
 
 _CLI_CASES = [
@@ -593,10 +651,13 @@ _CLI_NUMBERS = ["nan", "inf", "1_0", "\u0661", "\uff12", "\u00a01", "0x10", "abc
 
 
 def _cli_argv(rng: random.Random, tmp: Path) -> list[str]:
-    case = rng.choice(_CLI_CASES)
+    fixed = rng.random() < 0.4
+    case = rng.choice(_CLI_FIXED if fixed else _CLI_CASES)
     num = rng.choice(_CLI_NUMBERS)
     long = str(tmp / ("x" * 300))
-    return [w.format(urdf=str(TWO_LINK), num=num, tmp=str(tmp), long=long) for w in case]
+    return [w.format(urdf=str(TWO_LINK), num=num, tmp=str(tmp), long=long,
+                     csv=str(tmp / "t.csv"), study=str(ROOT / "examples" / "benchmark_a.toml"))
+            for w in case]
 
 
 _URDF_STRUCTURE = [
@@ -643,7 +704,56 @@ _URDF_STRUCTURE = [
     ("deep nesting", lambda t: t.replace("<link name=\"tool\"/>",
                                           "<link name=\"tool\">" + "<visual>" * 500
                                           + "</visual>" * 500 + "</link>", 1)),
+    ("indefinite inertia", lambda t: _tool_inertia(t, 'iyz="0.5"')),
+    ("negative principal inertia", lambda t: _tool_inertia(t, 'iyz="0" ixx="-1e-3"')),
+    ("text in annotation", lambda t: t.replace(
+        '<pinflex:coordinates convention="absolute"/>',
+        '<pinflex:coordinates convention="absolute">relative</pinflex:coordinates>', 1)),
+    ("CDATA in annotation", lambda t: t.replace(
+        '<pinflex:material E="69e9" linear_density="1.9"/>',
+        '<pinflex:material E="69e9" linear_density="1.9"><![CDATA[2700]]></pinflex:material>',
+        1)),
+    ("prismatic joint", lambda t: t.replace('type="revolute"', 'type="prismatic"', 1)),
+    ("no limit", lambda t: t.replace(
+        '<limit lower="-6.2832" upper="6.2832" effort="100" velocity="10"/>', "", 1)),
+    ("limit text", lambda t: t.replace('lower="-6.2832"', 'lower="-6.2832 rad"', 1)),
+    ("origin tabs", lambda t: t.replace('<origin xyz="0.6 0 0"/>', '<origin xyz="0.6\t0\t0"/>',
+                                         1)),
+    ("mass entity digit", lambda t: t.replace('<mass value="0.855"/>',
+                                               '<mass value="0.&#1637;55"/>', 1)),
+    ("empty joint name", lambda t: t.replace('name="q2"', 'name=""', 1)),
+    ("parameter cycle", lambda t: t.replace(
+        "</robot>", '<pinflex:parameter name="a" value="{b}"/>'
+        '<pinflex:parameter name="b" value="{a}"/></robot>', 1)),
+    ("parameter in plain URDF", lambda t: t.replace('<mass value="0.855"/>',
+                                                     '<mass value="{mm}"/>', 1).replace(
+        "</robot>", '<pinflex:parameter name="mm" value="0.855"/></robot>', 1)),
+    ("namespace version 2", lambda t: t.replace("urn:pinflex:urdf:1", "urn:pinflex:urdf:2")),
+    ("two robots", lambda t: t + t),
 ]
+
+#: Structural variants that are valid (loaded, possibly with a warning).
+_URDF_STRUCTURE_VALID = {"continuous joint", "long axis", "inertia triangle",
+                         "namespace alias", "mass far beyond the beam"}
+
+_URDF_STRUCTURE += [
+    ("inertia triangle", lambda t: _tool_inertia(t, 'ixx="1"')),
+    ("namespace alias", lambda t: t.replace(
+        'xmlns:pinflex=', 'xmlns:pf="urn:pinflex:urdf:1" xmlns:pinflex=', 1).replace(
+        "<pinflex:coordinates", "<pf:coordinates", 1)),
+    ("mass far beyond the beam", lambda t: t.replace('link="link1" xyz="0.6 0 0"',
+                                                      'link="link1" xyz="6 0 0"', 1)),
+]
+
+
+def _tool_inertia(text: str, change: str) -> str:
+    """The two-link arm with an inertia on its (rigid, moving) tool link, one entry changed."""
+    attrs = {"ixx": "1e-3", "ixy": "0", "ixz": "0", "iyy": "1e-3", "iyz": "0", "izz": "1e-3"}
+    for key, value in re.findall(r'(\w+)="([^"]*)"', change):
+        attrs[key] = value
+    inertia = " ".join(f'{k}="{v}"' for k, v in attrs.items())
+    return text.replace('<link name="tool"/>', '<link name="tool"><inertial><mass value="0.5"/>'
+                        f'<inertia {inertia}/></inertial></link>', 1)
 
 _BASES = ["../two_link.urdf", "/etc/hostname", "file:///etc/hostname", "", "sub",
           "example-robot-data:../../../../etc/hostname", "example-robot-data:nothing.urdf",
@@ -678,6 +788,119 @@ _SWEEPS = ["targets.0.freq_hz=185,1_0", "targets.0.freq_hz=nan", "expansion.y0.m
            "expansion.order=2.5", "planar=maybe", "joints=stiff", "expansion.q0=[1.0]",
            "constraints.mass_budget_kg=\u0661", "targets.0.freq_hz=190,190",
            "expansion.quantity=hz", "robot=builtin:nothing.urdf"]
+
+
+#: One change of examples/benchmark_a.toml each: ``(label, old, new)``; all must be refused.
+_STUDY_CHANGES = [
+    ("order as date", "order = 4", "order = 1979-05-27"),
+    ("order huge", "order = 4", "order = 99999999999999999999999"),
+    ("order float", "order = 4", "order = 4.0"),
+    ("nested arrays", "order = 4", "order = 4\nx = " + "[" * 3000 + "]" * 3000),
+    ("targets as table", "[[targets]]", "[targets]"),
+    ("mode as bool", "mode = 1", "mode = true"),
+    ("mode huge", "mode = 1", "mode = 1000000000"),
+    ("freq as string", "freq_hz = 190.0", 'freq_hz = "190"'),
+    ("freq nested", "freq_hz = 190.0", "freq_hz = [[190.0]]"),
+    ("freq empty list", "freq_hz = 190.0", "freq_hz = []"),
+    ("freq 1e30", "freq_hz = 190.0", "freq_hz = 1e30"),
+    ("weight inf", "freq_hz = 190.0", "freq_hz = 190.0\nweight = inf"),
+    ("q0 three values", "q0 = [1.817, 5.312]", "q0 = [1.817, 5.312, 0.0]"),
+    ("q0 1e300", "q0 = [1.817, 5.312]", "q0 = [1e300, 5.312]"),
+    ("y0 unknown", "m2 = 0.125 }", "m3 = 0.125 }"),
+    ("y0 above bound", "y0 = { m1 = 0.125", "y0 = { m1 = 5.0"),
+    ("quantity", 'quantity = "freq_hz"', 'quantity = "hz"'),
+    ("robot empty", 'robot = "builtin:two_link.urdf"', 'robot = ""'),
+    ("robot folder", 'robot = "builtin:two_link.urdf"', 'robot = "."'),
+    ("robot device", 'robot = "builtin:two_link.urdf"', 'robot = "/dev/zero"'),
+    ("robot number", 'robot = "builtin:two_link.urdf"', "robot = 5"),
+    ("trajectory device", 'builtin = "benchmark_a"', 'csv = "/dev/zero"'),
+    ("trajectory two sources", 'builtin = "benchmark_a"', 'builtin = "benchmark_a"\ncsv = "t.csv"'),
+    ("trajectory none", 'builtin = "benchmark_a"', ""),
+    ("planar string", "planar = true", 'planar = "true"'),
+    ("joints table", "planar = true", 'planar = true\njoints = { q1 = "locked" }'),
+    ("values nan", "planar = true", "planar = true\nvalues = { m1 = nan }"),
+    ("duplicate target", "[options]", "[[targets]]\nmode = 1\nfreq_hz = 200.0\n[options]"),
+    ("report mode 0", "report_modes = [2, 3, 4]", "report_modes = [0]"),
+    ("max refinements huge", "report_modes = [2, 3, 4]",
+     "report_modes = [2, 3, 4]\nmax_refinements = 1000000"),
+    ("confirm_tol negative", "report_modes = [2, 3, 4]",
+     "report_modes = [2, 3, 4]\nconfirm_tol = -1.0"),
+    ("non-UTF-8", "# Paper", "# \udcff Paper"),
+    ("duplicate key", "planar = true", "planar = true\nplanar = false"),
+    ("hex", "order = 4", "order = 0x4"),
+]
+
+
+def _study_case(text: str, folder: Path, label: str, old: str, new: str):
+    """A study file with one change, loaded and checked against its robot."""
+    from pinflex.assignment.study import check_config, load_config
+
+    path = folder / "s.toml"
+    changed = text.replace(old, new, 1)
+    path.write_bytes(changed.encode("utf-8", "surrogateescape"))
+    cfg = load_config(path)
+    check_config(cfg)
+    return cfg
+
+
+_OUTPUT_TARGETS = ["fifo", "folder", "empty", "long", "under a file", "device"]
+
+
+def _output_case(kind: str, folder: Path):
+    """Write a small output to a target that cannot be written as a file: OutputError."""
+    import os
+
+    from pinflex.outputs import write_text
+
+    if kind == "fifo":
+        target = folder / "pipe"
+        if not target.exists():
+            os.mkfifo(target)
+    elif kind == "folder":
+        target = folder
+    elif kind == "empty":
+        target = Path("")
+    elif kind == "long":
+        target = folder / ("x" * 300)
+    elif kind == "under a file":
+        (folder / "file").write_text("x")
+        target = folder / "file" / "out.csv"
+    else:  # a device: /dev/null exists everywhere and must never be replaced
+        target = Path(os.devnull)
+    write_text(target, "t,q1\n0,0\n", "CSV")
+
+
+#: Command lines that must be refused (exit 2, one line) before any work.
+_CLI_FIXED = [
+    ["modes", "{urdf}", "--planar", "--set", "m1=0.1", "--set", "m1=0.2"],
+    ["modes", "{urdf}", "--planar", "--q", "1e300", "0"],
+    ["modes", "{urdf}", "--planar", "--trajectory", "{csv}", "--csv", ""],
+    ["modes", "{urdf}", "--planar", "--trajectory", "{csv}", "--csv", "{tmp}/pipe"],
+    ["modes", "{urdf}", "--planar", "--trajectory", "/dev/zero"],
+    ["modes", "/dev/zero"],
+    ["export", "{urdf}", "--planar", "--rayleigh", "0", "1e300", "--out", "{tmp}/e.npz"],
+    ["export", "{urdf}", "--planar", "--out", "{tmp}/e.xyz"],
+    ["view", "{urdf}", "--planar", "--modes", "100000", "--html", "{tmp}/v.html"],
+    ["view", "{urdf}", "--planar", "--amplitude", "1e300", "--html", "{tmp}/v.html"],
+    ["view", "{urdf}", "--planar", "--serve-seconds", "1e300", "--html", "{tmp}/v.html"],
+    ["view", "{urdf}", "--planar", "--bind", "no.such.host.invalid"],
+    ["path", "{urdf}", "--frame", "tool", "--through", "0.5", "0.5", "0", "--q", "1e9", "0",
+     "--out", "{tmp}/p.csv"],
+    ["assign", "{study}", "--target-tol", "1e300"],
+    ["assign", "{study}", "--confirm-tol", "2"],
+    ["assign", "/dev/zero"],
+    ["size", "{study}", "--order", "99"],
+    ["simulate", "{study}", "--exaggeration", "-1"],
+    ["prbdm", "--starts", "1000000000"],
+    ["prbdm", "--sections", "1000000000"],
+    ["prbdm", "--links", "1000000"],
+    ["batch", "prbdm", "--beams", "0", "--store", "{tmp}/b.db"],
+    ["batch", "prbdm", "--beams", "100000000000", "--store", "{tmp}/b.db"],
+    ["batch", "prbdm", "--beams", "1", "--workers", "100000", "--store", "{tmp}/b.db"],
+    ["batch", "assign", "{study}", "--store", "{tmp}/a.db", "--sweep",
+     "targets.0.freq_hz=" + ",".join(["190"] * 20_000)],
+    ["batch", "report", "/dev/zero"],
+]
 
 
 def _sweep_case(option: str):
@@ -797,8 +1020,8 @@ def run_families(n_variants: int = 600, seed: int = 20261202, cli: int = 40) -> 
             path = tmp / f"st{k}.urdf"
             path.write_text(change(texts[TWO_LINK]))
             status, _ = outcome("urdf_structure", label,
-                                lambda p=path: _model_of(p), label not in (
-                                    "continuous joint", "long axis"))
+                                lambda p=path: _model_of(p),
+                                label not in _URDF_STRUCTURE_VALID)
         # overlay bases
         for k in range(per // 4):
             label, path, refuse = _overlay_base(rng, tmp / f"ob{k}")
@@ -808,8 +1031,29 @@ def run_families(n_variants: int = 600, seed: int = 20261202, cli: int = 40) -> 
             option = rng.choice(_SWEEPS)
             outcome("sweep", option, lambda o=option: _sweep_case(o),
                     option != "targets.0.freq_hz=190,190")
+        # study files
+        study_text = (ROOT / "examples" / "benchmark_a.toml").read_text()
+        for k in range(per // 4):
+            label, old, new = rng.choice(_STUDY_CHANGES)
+            folder = tmp / f"st{k}"
+            folder.mkdir()
+            outcome("study_files", label, lambda f=folder, a=old, b=new, lab=label:
+                    _study_case(study_text, f, lab, a, b), True)
+        # output targets
+        for k in range(per // 8):
+            kind = rng.choice(_OUTPUT_TARGETS)
+            folder = tmp / f"out{k}"
+            folder.mkdir()
+            outcome("output_targets", kind, lambda f=folder, kd=kind: _output_case(kd, f),
+                    True)
         # command lines
+        import os
+
         from pinflex.cli import main as cli_main
+
+        (tmp / "t.csv").write_text("t,q1,q2\n0,1.8,5.3\n0.1,1.81,5.31\n")
+        if not (tmp / "pipe").exists():
+            os.mkfifo(tmp / "pipe")
 
         for _ in range(cli):
             argv = _cli_argv(rng, tmp)

@@ -24,8 +24,9 @@ def test_fuzzed_inputs_raise_only_pinflex_errors(record_property):
 
 
 def test_further_families_raise_only_pinflex_errors(record_property):
-    """Trajectory headers, Unicode digits, parameter references in every attribute,
-    [simulation] bounds, API argument types and command lines: 0 foreign, 0 silent.
+    """Trajectory headers and units, Unicode digits, parameter references in every attribute,
+    [simulation] bounds, study files, URDF structure, output targets, API argument types and
+    command lines: 0 foreign, 0 silent.
 
     A permuted trajectory header must load into the right columns; a reference must be
     refused exactly when its literal is; a CLI refusal is exit 2 and one line.
@@ -46,5 +47,7 @@ def test_further_families_raise_only_pinflex_errors(record_property):
     assert fam["trajectory_headers"].get("accepted", 0) > 0  # permuted headers load
     assert fam["unicode_digits"].get("accepted", 0) == 0
     assert fam["api_types"].get("accepted", 0) == 0
+    for family in ("study_files", "output_targets"):  # every variant is a refusal
+        assert fam[family]["variants"] >= 15 and fam[family].get("accepted", 0) == 0, family
     assert fam["parameter_reference"].get("refused_only_as_reference", 0) == 0
     assert fam["parameter_reference"]["refused"] == fam["parameter_reference(literal)"]["refused"]
