@@ -462,9 +462,20 @@ def _api_calls(rng: random.Random):
         ("expand(order)", lambda v: _expand(model, order=v)),
         ("expand(q0)", lambda v: _expand(model, q0=[v, 5.3])),
         ("Trajectory(times)", lambda v: _trajectory_times(v)),
+        ("Trajectory(name)", lambda v: _trajectory_kw(name=v)),
+        ("Trajectory(joint_names)", lambda v: _trajectory_kw(joint_names=v)),
+        ("check_limits(on_violation)", lambda v: _trajectory_kw().check_limits(
+            -1.0, 1.0, on_violation=v)),
+        ("evaluate(quantity)", lambda v: tm.evaluate(q, quantity=v)),
+        ("example_robot(name)", lambda v: _example_robot(v)),
+        ("assign_frequencies(targets)", lambda v: _assign(model, v)),
+        ("simulate_torque(kp)", lambda v: _torque(model, kp=v)),
+        ("simulate_torque(duration_s)", lambda v: _torque(model, duration_s=v)),
+        ("FlexibleModel(coordinates)", lambda v: FlexibleModel(TWO_LINK, coordinates=v)),
     ]
     legit = {"frequencies(y)": (None,), "evaluate(linear_in_design)": (True,),
              "Mass(design)": (True,), "evaluate(tol)": (float("inf"),),  # inf: no check
+             "Trajectory(name)": (None, "1.0", "\u0661"), "FlexibleModel(coordinates)": (None,),
              "frequencies(n_modes)": (None,),
              "FlexibleModel(planar)": (True,), "simulate_prescribed(damping)": (None,)}
     for label, call in calls:
@@ -525,6 +536,33 @@ def _expand(model, order=1, q0=(1.8, 5.3)):
     from pinflex.parametric import expand
 
     return expand(model, q0, order=order, modes=[1])
+
+
+def _trajectory_kw(**kwargs):
+    from pinflex.trajectory import Trajectory
+
+    return Trajectory([0.0, 1.0], [[0.0, 0.0], [0.0, 0.0]], **kwargs)
+
+
+def _example_robot(name):
+    from pinflex.native.robots import example_robot_urdf
+
+    return example_robot_urdf(name)
+
+
+def _assign(model, targets):
+    from pinflex.assignment.driver import assign_frequencies
+    from pinflex.trajectory import Trajectory
+
+    traj = Trajectory([0.0, 0.01], [[1.8, 5.3], [1.8, 5.3]], model.joint_names)
+    return assign_frequencies(model, traj, targets)
+
+
+def _torque(model, kp=0.0, duration_s=0.001):
+    from pinflex.dynamics.simulate import simulate_torque
+
+    return simulate_torque(_dynamics(model), q0=[1.8, 5.3], duration_s=duration_s, kp=kp,
+                           sample_hz=1000.0)
 
 
 def _trajectory_times(v):

@@ -24,6 +24,7 @@ from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import held_rayleigh
 from pinflex.resources import check_series
+from pinflex.validation import require_number
 from pinflex.trajectory.samples import in_model_order
 
 
@@ -109,6 +110,8 @@ def simulate_torque(
     check_series(duration_s * sample_hz, 4 * dyn.model.ndof + 8, "the simulation's output",
                  "lower sample_hz or duration_s")
     check_damping(damping)
+    for name, gain in (("kp", kp), ("kd", kd)):
+        require_number(gain, f"{name} (PD gain)", ge=0.0)
     damping = damping or Damping()
     if damping.kind == "modal":
         raise ConfigurationError("the torque drive takes Rayleigh damping or none")

@@ -260,6 +260,9 @@ class FlexibleModel:
         self.nv = self.model.nv
         if self.nv != len(self.joint_names):
             raise InvalidDescription("only joints with one degree of freedom are supported")
+        if coordinates is not None and not isinstance(coordinates, str):
+            raise ConfigurationError(f"coordinates={coordinates!r}: expected 'relative' or "
+                                     "'absolute'")
         absolute = description.absolute_coordinates if coordinates is None else (
             coordinates == "absolute"
         )

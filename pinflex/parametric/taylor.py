@@ -378,6 +378,8 @@ class TaylorModel:
                 variable the model does not expand, or (with the check on) is not finite.
             TaylorRadiusExceeded: ``strict`` and some sample's estimated error exceeds ``tol``.
         """
+        if not isinstance(quantity, str) or quantity not in ("eigval", "freq_hz"):
+            raise ConfigurationError(f"quantity = {quantity!r}: expected 'eigval' or 'freq_hz'")
         if not (type(Q) is np.ndarray and Q.dtype == np.float64):
             Q = float_array(Q, "joint values Q")  # finiteness: checked with warn/strict
         linear_in_design = require_bool(linear_in_design, "linear_in_design")

@@ -6,6 +6,7 @@ import csv
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
@@ -99,7 +100,10 @@ class Trajectory:
             raise InvalidTrajectory(f"q beyond {MAX_JOINT_VALUE:g} (rad or m) at samples "
                                     f"{_bad_rows(big_q)}: joint values are in radians or metres")
         given = self.joint_names
-        if isinstance(given, str) or not all(isinstance(n, str) for n in given):
+        if self.name is not None and not isinstance(self.name, str):
+            raise InvalidTrajectory(f"name must be a string or None, got {self.name!r}")
+        if isinstance(given, str) or not isinstance(given, Sequence | np.ndarray) or \
+                not all(isinstance(n, str) for n in given):
             raise InvalidTrajectory(f"joint_names must be a sequence of names, got {given!r}")
         names = tuple(given) or tuple(f"q{j + 1}" for j in range(q.shape[1]))
         if len(names) != q.shape[1]:
@@ -161,6 +165,9 @@ class Trajectory:
                 f"limits must be scalars or have shape ({nv},), got lower {np.shape(lower)} "
                 f"and upper {np.shape(upper)}"
             ) from err
+        if not isinstance(on_violation, str) or on_violation not in ("warn", "raise"):
+            raise InvalidTrajectory(f"on_violation = {on_violation!r}: expected 'warn' or "
+                                    "'raise'")
         mask = (self.q < lo) | (self.q > hi)
         if np.any(mask):
             samples, joints = np.nonzero(mask)
@@ -246,7 +253,10 @@ class Trajectory:
 
         text = read_text(path, "trajectory CSV", InvalidTrajectory)
         label = Path(path).name
-        limit = MAX_SAMPLES if max_samples is None else int(max_samples)
+        from pinflex.validation import require_count
+
+        limit = MAX_SAMPLES if max_samples is None else require_count(
+            max_samples, "max_samples", error=InvalidTrajectory)
         lines = text.count("\n") + 1
         if lines - 1 > limit:
             rows_est = sum(1 for line in text.splitlines()[1:] if line.strip()
