@@ -16,6 +16,7 @@ import warnings
 import numpy as np
 import pytest
 from conftest import ROOT, TWO_LINK
+from fuzz_inputs import _assign, _example_robot, _torque, _trajectory_kw
 
 from pinflex.description import parse
 from pinflex.exceptions import (
@@ -208,15 +209,16 @@ def test_python_beam_and_mass_specifications_round_trip():
 
 @pytest.mark.parametrize("call, match", [
     (lambda m, tm: tm.evaluate([1.8, 5.3], quantity=["freq_hz"]), "quantity"),
-    (lambda m, tm: _traj(name=3.5), "name must be a string"),
-    (lambda m, tm: _traj(joint_names=None), "joint_names must be a sequence"),
-    (lambda m, tm: _traj().check_limits(-1.0, 1.0, on_violation=None), "on_violation"),
+    (lambda m, tm: _trajectory_kw(name=3.5), "name must be a string"),
+    (lambda m, tm: _trajectory_kw(joint_names=None), "joint_names must be a sequence"),
+    (lambda m, tm: _trajectory_kw().check_limits(-1.0, 1.0, on_violation=None),
+     "on_violation"),
     (lambda m, tm: _assign(m, None), "targets must be a list of pinflex Target"),
     (lambda m, tm: _assign(m, [1, "a"]), "targets must be a list of pinflex Target"),
     (lambda m, tm: _torque(m, kp="1"), "kp"),
     (lambda m, tm: _torque(m, duration_s=None), "duration_s"),
     (lambda m, tm: _torque(m, duration_s=True), "duration_s"),
-    (lambda m, tm: _example(None), "named by a string"),
+    (lambda m, tm: _example_robot(None), "named by a string"),
 ])
 def test_api_arguments_of_the_wrong_type_are_named(call, match):
     """Each was a TypeError, AttributeError or ValueError from deep inside, or (a boolean
@@ -230,30 +232,3 @@ def test_api_arguments_of_the_wrong_type_are_named(call, match):
     with pytest.raises(PinflexError, match=match):
         call(model, tm)
 
-
-def _traj(**kwargs):
-    from pinflex.trajectory import Trajectory
-
-    return Trajectory([0.0, 1.0], [[0.0, 0.0], [0.0, 0.0]], **kwargs)
-
-
-def _assign(model, targets):
-    from pinflex.assignment.driver import assign_frequencies
-    from pinflex.trajectory import Trajectory
-
-    traj = Trajectory([0.0, 0.01], [[1.8, 5.3], [1.8, 5.3]], model.joint_names)
-    return assign_frequencies(model, traj, targets)
-
-
-def _torque(model, kp=0.0, duration_s=0.001):
-    from pinflex.dynamics.simulate import simulate_torque
-    from pinflex.dynamics.terms import ErlsDynamics
-
-    return simulate_torque(ErlsDynamics(model), q0=[1.8, 5.3], duration_s=duration_s, kp=kp,
-                           sample_hz=1000.0)
-
-
-def _example(name):
-    from pinflex.native.robots import example_robot_urdf
-
-    return example_robot_urdf(name)
