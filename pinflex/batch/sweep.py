@@ -246,9 +246,7 @@ def plan_cases(config_path: str | Path, sweeps: list[tuple[str, list]]):
         ConfigurationError: If the study file is invalid.
         InvalidSweep: If a sweep does not apply to it.
     """
-    from pinflex.assignment.study import load_config
-
-    from pinflex.assignment.study import check_config
+    from pinflex.assignment.study import check_config, load_config
     from pinflex.exceptions import StudyError
 
     base = load_config(config_path)
