@@ -125,12 +125,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser(chosen_subcommand(words)).parse_args(words)
     except SystemExit as exc:  # usage errors (one line printed), --help, --version
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
-    empty = [k for k, v in vars(args).items()
-             if v == "" or (isinstance(v, list) and "" in v)]
-    if empty:  # an empty file name, address or value is never meant
-        name = empty[0]
-        print(f"pinflex {args.command}: error: an empty value was given to "
-              f"{name if name in ('urdf', 'config', 'store') else '--' + name.replace('_', '-')}",
+    empty = [i for i, w in enumerate(words) if w == ""]
+    if empty:  # an empty file name, address or value typed on the command line is never meant
+        i = empty[0]
+        name = words[i - 1] if i and words[i - 1].startswith("-") else "an argument"
+        print(f"pinflex {args.command}: error: an empty value was given to {name}",
               file=sys.stderr)
         return 2
     import warnings
