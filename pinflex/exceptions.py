@@ -297,6 +297,11 @@ class UnreadableFile(InvalidDescription):
     """An input file is missing, binary, not UTF-8 text or too large to be a description."""
 
 
+class UnsafePath(InvalidDescription):
+    """A file named by a description (an overlay's base, a mesh) lies outside the model's
+    folder and the package roots; reading it needs an explicit ``allow_paths=True``."""
+
+
 class NoFlexibleLink(InvalidDescription):
     """A modal analysis was asked of a robot with no flexible link (no elastic modes)."""
 

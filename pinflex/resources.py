@@ -119,6 +119,27 @@ def check_modal(ndof: int, n_poses: int = 1, what: str = "the modal analysis") -
                                                  else ""))
 
 
+def check_model_size(elements, nv: int, planar: bool, what: str) -> None:
+    """Bound a model's assembly and modal analysis before any matrix is built.
+
+    Args:
+        elements: Element count of each flexible link.
+        nv: Rigid joint count.
+        planar: Whether the model keeps 3 dof per node (else 6).
+        what: The model, for the message.
+
+    The model has at most ``nv + sum k e`` dof (``k`` = 3 or 6 per node); its modal analysis
+    is bounded by :func:`modal_estimate`. Each beam is first assembled densely on its
+    ``6 (e + 1)`` node dof (three such matrices at once), which bounds the longest link.
+    """
+    k = 3 if planar else 6
+    ndof = int(nv) + sum(k * int(e) for e in elements)
+    line = max((6 * (int(e) + 1) for e in elements), default=0)
+    nbytes = max(modal_estimate(ndof)[0], 3.0 * line * line * _BYTES)
+    check_memory(nbytes, f"{what} ({ndof} dof, {max(elements, default=0)} elements on its "
+                 "longest link)", "use fewer elements per link")
+
+
 def taylor_estimate(nvars: int, order: int, ndof: int, ndesign: int = 0) -> tuple[float, float]:
     """``(bytes, seconds)`` of exact Taylor coefficients of M and K (see the module)."""
     ncoef = math.comb(nvars + order, order)
@@ -155,3 +176,43 @@ def check_taylor(nvars: int, order: int, ndof: int, ndesign: int = 0) -> None:
     check_memory(nbytes, what, "lower the order, expand fewer joints or design variables, "
                  "or use fewer elements")
     warn_time(seconds, what)
+
+
+#: Most poses a single modal sweep may take (a walk between poses, a trajectory); each is a
+#: dense modal analysis, so this many take minutes even on small models.
+MAX_POSES = 100_000
+
+
+def check_poses(n_poses: float, ndof: int, what: str, fix: str,
+                maximum: int = MAX_POSES) -> int:
+    """Bound a sweep of modal analyses before it starts: count, memory and time.
+
+    Raises:
+        ResourceLimitExceeded: More than ``maximum`` poses, or more memory than allowed; the
+            message gives the count and the time or memory estimate.
+    """
+    nbytes, seconds = modal_estimate(ndof, 1)
+    seconds = max(seconds, 5e-4)  # per pose with tracking, measured on small models
+    if not n_poses <= maximum:
+        raise ResourceLimitExceeded(
+            f"{what} needs {n_poses:.4g} modal analyses of {ndof} dof (about "
+            f"{n_poses * seconds:.3g} s), more than the {maximum} allowed; {fix}")
+    n = int(n_poses)
+    check_memory(float(n) * 2 * ndof * min(ndof, 64) * _BYTES,
+                 f"{what} ({n} poses of {ndof} dof)", fix)
+    warn_time(n * seconds, f"{what} ({n} modal analyses of {ndof} dof)")
+    return n
+
+
+def check_series(n_samples: float, width: int, what: str, fix: str) -> int:
+    """Bound a time series of ``n_samples`` rows of ``width`` numbers before it is made.
+
+    Raises:
+        ResourceLimitExceeded: Its memory estimate exceeds the limit (:func:`check_memory`),
+            with the sample count in the message.
+    """
+    if not n_samples <= 2**53:
+        raise ResourceLimitExceeded(f"{what} would have {n_samples:.3g} samples; {fix}")
+    check_memory(float(n_samples) * max(int(width), 1) * _BYTES,
+                 f"{what} ({n_samples:.3g} samples of {width} numbers)", fix)
+    return int(n_samples)

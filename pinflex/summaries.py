@@ -150,14 +150,14 @@ def model_summary(model: Any) -> str:
         joints = f"all {next(iter(kinds))} ({len(labels)})"
     else:
         joints = "; ".join(f"{label}: {', '.join(js)}" for label, js in kinds.items())
-    design = ", ".join(f"{n}={float(v):.4g}" for n, v in zip(model.design_names, model.y0))
+    design = ", ".join(f"{n}: {float(v):.4g}" for n, v in zip(model.design_names, model.y0))
     items = [
         ("robot", repr(name)),
         ("dof", f"{model.ndof} ({model.nx} elastic + {model.nv} joints"
                 f"{', planar' if model.planar else ''})"),
         ("flexible", links or "none"),
         ("joints", joints),
-        ("design", design or "none"),
+        ("design", "{" + design + "}" if design else "none"),
     ]
     if model.coordinates != "relative":
         items.append(("coordinates", model.coordinates))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 
 import numpy as np
@@ -11,11 +10,11 @@ import pytest
 pytest.importorskip("meshcat", reason="previews need meshcat (pip install meshcat)")
 pytest.importorskip("PIL.Image", reason="reading screenshots needs Pillow")
 
-from test_browser import (  # noqa: E402
-    BROWSERS,
+from chromium import (  # noqa: E402
     CAPTION_ROWS,
     HEIGHT,
     WIDTH,
+    find_browser,
     near,
     orange,
     screenshots,
@@ -30,10 +29,7 @@ Q0 = np.array([1.817, 5.312])
 @pytest.fixture(scope="module")
 def chromium():
     """Path of a Chromium executable, or skip."""
-    for name in BROWSERS:
-        if shutil.which(name):
-            return shutil.which(name)
-    pytest.skip("no Chromium found: install it with `apt-get install -y chromium`")
+    return find_browser()
 
 
 @pytest.fixture(scope="module")

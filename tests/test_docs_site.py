@@ -11,17 +11,16 @@ from __future__ import annotations
 import inspect
 import os
 import re
-import shutil
 import subprocess
 import sys
 from html import unescape
 from pathlib import Path
 
 import pytest
+from chromium import find_browser
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "docs" / "_site" / "mkdocs.yml"
-BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 
 
 @pytest.fixture(scope="module")
@@ -47,12 +46,7 @@ def site(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def browser() -> str:
     """Path of a Chromium executable, or skip."""
-    for name in BROWSERS:
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.skip("no Chromium found: install it with `apt-get install -y chromium` "
-                "(.ci/run does so when it can)")
+    return find_browser()
 
 
 def dom(browser: str, page: Path, profile: Path) -> str:

@@ -36,14 +36,17 @@ def _section(name: str) -> str:
 
 
 def test_every_example_has_its_section_and_a_test():
-    """Every file of examples/ is on the page; every Python example is tested here."""
+    """Every script and study of examples/ is on the page and tested here."""
     text = PAGE.read_text()
     tests = Path(__file__).read_text()
-    for path in sorted(EXAMPLES.iterdir()):
+    for path in sorted(EXAMPLES.rglob("*")):
+        name = path.relative_to(EXAMPLES).as_posix()
         if path.suffix in (".py", ".toml"):
-            assert f"## `{path.name}`" in text, path.name
+            assert f"## `{name}`" in text, name
         if path.suffix == ".py":
-            assert f'_load("{path.stem}")' in tests, path.name
+            assert f'_load("{path.stem}")' in tests, name
+        if path.suffix == ".toml":
+            assert f'"{name}"' in tests, name
 
 
 def test_ur5_example_heavier_payload_lowers_mode_1():
@@ -113,10 +116,46 @@ def test_benchmark_a_study_assigns_what_the_page_says(tmp_path):
     """The study file reproduces the assignment the examples page quotes."""
     from pinflex.assignment.study import load_config, run_config
 
-    cfg = load_config(EXAMPLES / "benchmark_a.toml")
+    cfg = load_config(EXAMPLES / "benchmark_a.toml")  # "benchmark_a.toml"
     _, _, result = run_config(cfg)
     m1, m2 = result.y
     page = _section("benchmark_a.toml")
     assert f"m1 = {m1:.3f} kg" in page and abs(m2) < 1e-9
     before, after = 100 * result.max_error_before, 100 * result.max_error_after
     assert f"{before:.2f} % → {after:.2f} %" in page
+
+
+def _cli_json(argv: list[str], capsys) -> dict:
+    import json
+    import warnings
+
+    from pinflex.cli import main
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code = main(argv + ["--json"])
+    out = capsys.readouterr().out
+    assert code == 0, out[-2000:]
+    return json.loads(out)
+
+
+@pytest.mark.slow
+def test_kinova_assignment_study_meets_its_target_on_the_exact_model(capsys):
+    """The Kinova tube assignment is confirmed on the exact model with the quoted errors."""
+    name = "real_arms/kinova_assign.toml"
+    out = _cli_json(["assign", str(EXAMPLES / name)], capsys)
+    assert out["status"] == "met" and out["improved"]
+    before, after = 100 * out["max_error_before"], 100 * out["max_error_after"]
+    assert f"{before:.2f} % → {after:.2f} %" in _section(name)
+
+
+@pytest.mark.slow
+def test_kinova_sizing_study_holds_its_floor_with_the_quoted_mass(capsys):
+    """The Kinova tube sizing keeps mode 1 at 40 Hz on the exact model with the quoted mass."""
+    name = "real_arms/kinova_size.toml"
+    out = _cli_json(["size", str(EXAMPLES / name)], capsys)
+    page = _section(name)
+    assert out["status"] == "met" and out["margin_hz"] >= 0.0
+    assert f"design mass {out['mass_start_kg']:.4f} kg → {out['mass_kg']:.4f} kg" in page
+    start, end = out["min_freq_start_hz"][0], out["min_freq_hz"][0]
+    assert f"{start:.2f} Hz to {end:.2f} Hz" in page

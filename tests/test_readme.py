@@ -110,6 +110,92 @@ def _tour(path: Path) -> tuple[list[str], str]:
     return lines, text[start:]
 
 
+def _tour_python(path: Path) -> str:
+    text = path.read_text()
+    return re.search(r"```python\n(.*?)```", text[text.index("<!-- tour"):], flags=re.S).group(1)
+
+
+def test_readme_is_short_and_opens_with_the_two_commands():
+    """At most 12 KB; its first two commands install and run the demo, then the tests, and the
+    second is the very line `.ci/run` runs."""
+    text = README.read_text()
+    assert len(text.encode()) <= 12 * 1024
+    first, second = re.findall(r"```bash\n(.*?)```", text, flags=re.S)[:2]
+    assert first.strip() == 'pip install -e ".[test]" && pinflex demo'
+    assert second.strip() == 'pip install -e ".[test]" && pytest -q'
+    ci = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert second.strip() in ci
+    for phrase in ("paper 000", "paper 001", "issue ", "was ", "TODO"):
+        assert phrase not in text, phrase
+
+
+def test_readme_tour_is_the_tested_one():
+    """The README's tour is the getting-started tour that the test above runs, line for line,
+    and its Python is the getting-started Python (run below)."""
+    assert _tour(README)[0] == _tour(TOUR)[0]
+    assert _tour_python(README) == _tour_python(TOUR)
+
+
+def test_tour_python_runs(tmp_path, monkeypatch, capsys):
+    """The tour's Python block runs from the repository folder and prints the modes table."""
+    monkeypatch.chdir(ROOT)
+    env: dict = {}
+    exec(compile(_tour_python(TOUR), "tour", "exec"), env)
+    res = env["result"]
+    assert res.freq_hz.shape == (4,) and np.all(np.diff(res.freq_hz) > 0)
+    assert f"{res.freq_hz[0]:.2f}" in capsys.readouterr().out
+    f = env["taylor"].evaluate([[1.9, 5.2]], [0.1, 0.0], quantity="freq_hz")
+    exact = env["arm"].modes([1.9, 5.2], y=[0.1, 0.0], n_modes=1).freq_hz[0]
+    assert abs(float(np.ravel(f)[0]) - exact) < 1e-3 * exact
+
+
+def _figures_table() -> list[list[str]]:
+    section = _readme_section("## How fast, how exact")
+    assert section is not None
+    rows = [r.strip().strip("|").split("|") for r in section.splitlines() if r.startswith("| ")]
+    return [[c.strip() for c in r] for r in rows[1:]]  # without the header
+
+
+def test_readme_figures_name_their_commands_and_match_the_docs():
+    """Five rows; every command names a file that exists and options its script accepts; every
+    figure is the one the performance, validation or examples page states with its conditions."""
+    rows = _figures_table()
+    assert len(rows) == 5
+    pages = "".join((ROOT / "docs" / p).read_text()
+                    for p in ("performance.md", "validation.md", "examples.md"))
+    for _, result, command in rows:
+        for figure in re.findall(r"[0-9][0-9.e-]*(?: %|×| ms)?", result):
+            if figure.rstrip(".").isdigit() and len(figure) < 3:
+                continue  # counts such as '24 random poses'
+            assert figure in pages, (figure, result)
+        for cmd in re.findall(r"`([^`]+)`", command):
+            argv = shlex.split(cmd)
+            assert argv[0] in ("python", "pytest", "pinflex"), cmd
+            files = [a for a in argv[1:] if "/" in a]
+            assert files and all((ROOT / f).is_file() for f in files), cmd
+            if argv[0] == "python":
+                source = (ROOT / argv[1]).read_text()
+                for opt in (a for a in argv[2:] if a.startswith("--")):
+                    assert f'"{opt}"' in source, (cmd, opt)
+
+
+def test_readme_links_and_citation():
+    """Relative links point at files of the repository; CITATION.cff carries pyproject's
+    version and both papers' DOIs, as the README's references do."""
+    import tomllib
+
+    text = README.read_text()
+    for target in re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", text):
+        if not target.startswith("http"):
+            assert (ROOT / target).exists(), target
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    cff = (ROOT / "CITATION.cff").read_text()
+    assert f'version: "{version}"' in cff
+    for doi in ("10.3390/app112311558", "10.1115/1.4045602"):
+        assert f"doi: {doi}" in cff and f"doi.org/{doi}" in text
+    assert "BSD 3-Clause License" in (ROOT / "LICENSE").read_text()
+
+
 def test_tour_commands_run_and_print_what_the_prose_says(tmp_path, monkeypatch, capsys):
     """The short tour's commands exit 0 from the repository folder; its numbers are theirs."""
     import warnings

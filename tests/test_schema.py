@@ -259,11 +259,21 @@ def test_robot_without_flexible_link_raises_a_named_error():
 
 
 def test_shipped_files_load_without_warnings():
-    """The shipped URDF and overlays pass the schema without a single warning."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        for path in sorted((ROOT / "urdf").iterdir()):
+    """The shipped URDF and overlays pass the schema without a warning, except one.
+
+    The Panda's upstream URDF couples its fingers with <mimic>: pinflex moves them
+    independently and says so once (a file of the user's own is refused instead).
+    """
+    for path in sorted((ROOT / "urdf").iterdir()):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
             load(path)
+        messages = [str(w.message) for w in seen]
+        if path.name.startswith("panda"):
+            assert len(messages) == 1 and "panda_finger_joint2 mimics" in \
+                messages[0].replace("'", ""), messages
+        else:
+            assert messages == [], messages
 
 
 def test_schema_documents_every_attribute():

@@ -36,7 +36,7 @@ def _errors(tmp_path, text):
         ("order = 4", "order = 40", "expansion.order", "40 must be at most 12"),
         ("order = 4", "order = 4.0", "expansion.order", "expected a whole number"),
         ("freq_hz = 190.0", "freq_hz = nan", "targets[0].freq_hz", "must be finite"),
-        ("freq_hz = 190.0", "freq_hz = -190.0", "targets[0].freq_hz", "must be above 0"),
+        ("freq_hz = 190.0", "freq_hz = -190.0", "targets[0].freq_hz", "must be a positive number"),
         ("mode = 1", "mode = 30", "targets[0].mode", "mode 30 does not exist"),
         ("m1 = 0.125, m2 = 0.125 }", "m1 = 0.125, m3 = 0.125 }", "expansion.y0.m3",
          "is not a design variable"),

@@ -35,7 +35,7 @@ def test_flexible_model_summary_names_what_matters(two_link_planar):
     """Robot, dof, flexible links, joint conditions and design, on a few lines."""
     text = model_summary(two_link_planar)
     for part in ("'two_link'", "23 (21 elastic + 2 joints, planar)", "link1 (4 elements, 0.6 m)",
-                 "link2 (3 elements, 0.45 m)", "all free (2)", "m1=0.125", "absolute"):
+                 "link2 (3 elements, 0.45 m)", "all free (2)", "{m1: 0.125, m2: 0.125}", "absolute"):
         assert part in text, part
     assert len(text.splitlines()) <= 10
 
@@ -51,3 +51,29 @@ def test_taylor_summary_names_order_variables_modes_and_radius(two_link_planar):
     r = np.asarray(tm.radius)
     assert f"mode 2: {array_summary(r[:, 1])}" in text
     assert "array(" not in text and len(text) < 600
+    assert repr(tm) == text
+
+
+def test_flexible_model_prints_its_summary_and_lists_its_public_surface(two_link_planar):
+    """repr is the summary; dir() lists the public names, not the helpers other layers call."""
+    from pinflex.erls.model import PUBLIC
+
+    assert repr(two_link_planar) == model_summary(two_link_planar)
+    public = [n for n in dir(two_link_planar) if not n.startswith("_")]
+    assert public == sorted(PUBLIC)
+    assert "check_q" not in public and "pose_terms_one" not in public
+    assert all(hasattr(two_link_planar, n) for n in PUBLIC)
+
+
+def test_result_reprs_summarise(two_link_planar):
+    """An assignment result prints its fields with arrays summarised, in under 40 lines."""
+    import pinflex
+    from pinflex.assignment.study import user_trajectory
+
+    traj = user_trajectory(two_link_planar, "benchmark_a")
+    result = pinflex.assign_frequencies(two_link_planar, traj, [pinflex.Target(1, 190.0)],
+                                        q0=[1.817, 5.312])
+    text = repr(result)
+    assert "array(" not in text and len(text.splitlines()) < 40
+    assert f"max_error_after={result.max_error_after:.6g}" in text
+    assert "freq_after_hz=<152×1 float64" in text

@@ -117,3 +117,80 @@ def test_viewer_server_dies_with_its_process(tmp_path, sig):
 def test_pinflex_view_leaves_no_orphan_on_sigterm(tmp_path):
     """The same through the `pinflex view` command (slow: it builds a model first)."""
     _check_no_orphan(tmp_path, signal.SIGTERM, cli=True)
+
+
+def _listening(pid: int) -> set[str]:
+    return {c.laddr.ip for c in psutil.Process(pid).net_connections(kind="inet")
+            if c.status == psutil.CONN_LISTEN}
+
+
+def test_served_viewer_listens_on_localhost_only():
+    """The web and zmq ports listen on 127.0.0.1 only (meshcat's own: 0.0.0.0 and [::]);
+    bind= chooses another address on request."""
+    from pinflex.exceptions import ViewerServerError
+    from pinflex.visualization import MeshcatServer
+
+    server = MeshcatServer()
+    try:
+        assert server.web_url.startswith("http://127.0.0.1:")
+        assert _listening(server.pid) == {"127.0.0.1"}
+    finally:
+        server.close()
+    wide = MeshcatServer(bind="0.0.0.0")
+    try:
+        assert "0.0.0.0" in _listening(wide.pid)
+    finally:
+        wide.close()
+    with pytest.raises(ViewerServerError):
+        MeshcatServer(bind="")
+
+
+def test_viewer_memory_is_bounded_under_dropped_connections():
+    """5,000 websocket peers that vanish without closing: server RSS grows < 50 MB.
+
+    Each peer completes the handshake and then never reads (a closed laptop lid, a dropped
+    network): meshcat's server kept every such connection with the scene (here a 10,000-point
+    cloud, ~240 kB) queued in its send buffer, about 14 MB per 1,000 peers for a scene half
+    this size. pinflex's keeps at most 16 websockets and drops the oldest at once.
+    """
+    import base64
+    import re
+    import socket
+
+    import meshcat.geometry as g
+    import numpy as np
+
+    from pinflex.visualization import served_visualizer
+
+    vis = served_visualizer()
+    server = vis.window.pinflex_server
+    host, port = re.match(r"http://([^:/]+):(\d+)/", server.web_url).groups()
+    rng = np.random.default_rng(0)
+    cloud = rng.random((3, 10_000)).astype(np.float32)
+    vis["cloud"].set_object(g.PointCloud(cloud, cloud))
+    held: list[socket.socket] = []
+
+    def rss_mb() -> float:
+        return psutil.Process(server.pid).memory_info().rss / 2**20
+
+    try:
+        before = rss_mb()
+        for _ in range(50):
+            batch = [socket.create_connection((host, int(port)), timeout=30) for _ in range(100)]
+            for s in batch:
+                s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+                key = base64.b64encode(os.urandom(16)).decode()
+                s.sendall((f"GET / HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+                           f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+                           "Sec-WebSocket-Version: 13\r\n\r\n").encode())
+            for s in batch:
+                assert s.recv(12) == b"HTTP/1.1 101"
+            held += batch
+        growth = rss_mb() - before
+        assert growth < 50.0, f"server RSS grew {growth:.1f} MB over 5,000 dropped peers"
+        with urllib.request.urlopen(server.web_url, timeout=10) as page:  # still serving
+            assert page.status == 200
+    finally:
+        for s in held:
+            s.close()
+        server.close()

@@ -95,13 +95,18 @@ def annotations_page() -> str:
             lines.append(f" Its `{el.declares}` declares a name that numeric attributes may "
                          f"reference as `{{{el.declares}}}`.")
         lines.append("")
-        lines.append("| attribute | type | required | unit | bounds | ranges | {param} | meaning |")
-        lines.append("|---|---|---|---|---|---|---|---|")
+        lines.append("| attribute | meaning | type | values |")
+        lines.append("|---|---|---|---|")
         for aname, a in el.attrs.items():
-            param = "yes" if a.reference and a.kind in ("float", "int", "vec3") else ""
+            kind = a.kind + (f" [{a.unit}]" if a.unit else "")
+            values = "; ".join(v for v in (
+                "required" if a.required else "",
+                _attr_bounds(a),
+                _attr_ranges(a),
+                "may be {param}" if a.reference and a.kind in ("float", "int", "vec3") else "",
+            ) if v)
             lines.append("| " + " | ".join(_cell(c) for c in (
-                f"`{aname}`", a.kind, "yes" if a.required else "", a.unit, _attr_bounds(a),
-                _attr_ranges(a), param, a.doc)) + " |")
+                f"`{aname}`", a.doc, kind, values)) + " |")
         lines.append("")
     lines += [
         "## Limits",
@@ -145,13 +150,13 @@ def _study_table(title: str, keys, lines: list[str], anchor_note: str = "") -> N
     if anchor_note:
         lines.append(anchor_note)
         lines.append("")
-    lines.append("| key | type | required | bounds | meaning |")
-    lines.append("|---|---|---|---|---|")
+    lines.append("| key | meaning | type | values |")
+    lines.append("|---|---|---|---|")
     nested = []
     for name, k in keys.items():
+        values = "; ".join(v for v in ("required" if k.required else "", _key_bounds(k)) if v)
         lines.append("| " + " | ".join(_cell(c) for c in (
-            f"`{name}`", _KINDS.get(k.kind, k.kind), "yes" if k.required else "",
-            _key_bounds(k), k.doc)) + " |")
+            f"`{name}`", k.doc, _KINDS.get(k.kind, k.kind), values)) + " |")
         if k.kind in ("table", "tables") and k.keys:
             nested.append((name, k))
     lines.append("")
@@ -241,9 +246,15 @@ def cli_page() -> str:
         _GENERATED.format(source="the argument parsers of pinflex.cli"),
         "# Command line",
         "",
-        "`pinflex SUBCOMMAND --help` prints the same text. Exit status: 0 on success, 2 for a "
-        "user error (one line on stderr saying what to fix), 1 for an internal error, 130 "
-        "when interrupted.",
+        "`pinflex SUBCOMMAND --help` prints the same text. Exit status: 0 on success; 3 when "
+        "`assign` or `size` ran but the exact model does not meet the targets, floors or "
+        "constraints; 2 for a user error (one line on stderr saying what to fix); 1 for an "
+        "internal error (one line; `--debug` shows the traceback); 130 when interrupted; 141 "
+        "when the reader of standard output went away (`pinflex modes ... | head`).",
+        "",
+        "Long commands draw a progress bar on stderr when it is a terminal (`modes "
+        "--trajectory`, `path`, `assign`, `size`, `simulate`, `view`, `batch`, `prbdm`); "
+        "`--no-progress` hides it.",
         "",
         "```text",
         parser.format_help().rstrip(),

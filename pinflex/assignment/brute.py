@@ -15,6 +15,7 @@ from pinflex.assignment.targets import Target, target_matrix
 from pinflex.erls import FlexibleModel
 from pinflex.erls.model import add_design_masses
 from pinflex.exceptions import ConfigurationError
+from pinflex.summaries import dataclass_summary
 from pinflex.trajectory import Trajectory
 
 
@@ -30,6 +31,8 @@ class BruteForceResult:
         evaluations: Number of designs evaluated.
         spacing: Final grid spacing per variable [kg].
     """
+
+    __repr__ = dataclass_summary  # fields summarised: no array dumps
 
     y_best_cost: np.ndarray
     best_cost: float
@@ -64,7 +67,7 @@ def exact_cost(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[T
             frequencies.
         EigenSolverError: A design makes the eigenproblem singular or unrestrained.
     """
-    Q = model.check_q(trajectory.q)
+    Q = model.check_q(trajectory.in_order(model.joint_names))
     ns = Q.shape[0]
     w = trajectory.trapezoid_weights()
     M0, Md, K = model.assemble(model.pose_terms(Q), _batch(ns))

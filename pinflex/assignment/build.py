@@ -88,7 +88,7 @@ def build_assignment(
         raise ConfigurationError("give at least one target")
     if quantity not in ("freq_hz", "eigval"):
         raise ConfigurationError(f"quantity='{quantity}': expected 'freq_hz' or 'eigval'")
-    Q = model.check_q(trajectory.q)
+    Q = model.check_q(trajectory.in_order(model.joint_names))
     if Q.ndim != 2:
         raise ConfigurationError("the trajectory needs joint samples of shape (ns, nv)")
     ns = Q.shape[0]

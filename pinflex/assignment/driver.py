@@ -81,6 +81,7 @@ from pinflex.exceptions import (
 from pinflex.parametric import TaylorModel
 from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory
+from pinflex.trajectory.samples import in_model_order
 
 __all__ = [
     "CONFIRM_TOL",
@@ -268,6 +269,11 @@ def assign_frequencies(
     def now() -> tuple[float, float]:
         return time.perf_counter(), time.thread_time()
 
+    if isinstance(targets, str | bytes) or not isinstance(targets, Sequence) or not all(
+            isinstance(t, Target) for t in targets):
+        raise ConfigurationError(f"targets must be a list of pinflex Target objects (mode, "
+                                 f"frequency history), got {targets!r}"[:300])
+    trajectory = in_model_order(model, trajectory)  # columns matched by joint name
     Q = model.check_q(trajectory.q)
     check_trajectory_limits(model, trajectory)
     if y_before is None:

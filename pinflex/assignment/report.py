@@ -17,7 +17,6 @@ prediction kept clear.
 from __future__ import annotations
 
 import csv
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -151,9 +150,9 @@ class AssignmentData:
 
     def to_json(self, path: str | Path) -> Path:
         """Write :meth:`to_dict` as a JSON file."""
-        from pinflex.outputs import write_text
+        from pinflex.outputs import json_text, write_text
 
-        return write_text(path, json.dumps(self.to_dict(), indent=1), "assignment JSON")
+        return write_text(path, json_text(self.to_dict(), indent=1), "assignment JSON")
 
     def constraint_lines(self) -> list[str]:
         """Readable lines, one per constraint, active ones marked."""
@@ -190,7 +189,7 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
     bands = list(settings.get("bands", []))
     budget = settings.get("mass_budget_kg")
     quantity = settings.get("quantity", "freq_hz")
-    Q = model.check_q(trajectory.q)
+    Q = model.check_q(trajectory.in_order(model.joint_names))
     ns = Q.shape[0]
     modes = list(result.modes)
     for m in [f[0] for f in floors] + [b[0] for b in bands]:

@@ -26,6 +26,7 @@ import numpy as np
 from pinflex.assignment.points import PiecewiseTaylor
 from pinflex.assignment.problem import AssignmentQP, QPSolution
 from pinflex.parametric import TaylorModel
+from pinflex.summaries import dataclass_summary
 
 __all__ = ["EXIT_NOT_MET", "STATUSES", "AssignmentResult"]
 
@@ -96,6 +97,8 @@ class AssignmentResult:
             "accepted", "radius"}`` (exact cost of the targets, relative constraint
             violation, trust radius as a fraction of each variable's range).
     """
+
+    __repr__ = dataclass_summary  # fields summarised: no array dumps
 
     found: bool
     design: dict[str, float]

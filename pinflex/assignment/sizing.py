@@ -37,6 +37,7 @@ import numpy as np
 from pinflex.erls.design import design_mass
 from pinflex.exceptions import AssignmentWarning, ConfigurationError
 from pinflex.parametric import expand
+from pinflex.summaries import dataclass_summary
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,8 @@ class SizingResult:
         status: ``"met"`` when every floor (and the budget) holds on the exact model, else
             ``"floors_unmet"`` (the command line then exits with 3).
     """
+
+    __repr__ = dataclass_summary  # fields summarised: no array dumps
 
     design: dict[str, float]
     y: np.ndarray
@@ -198,7 +201,7 @@ def size_for_floors(
         raise ConfigurationError(f"max_expansions = {max_expansions!r}: give a whole number >= 1")
     t_all = time.perf_counter()
     check_trajectory_limits(model, trajectory)
-    Q = np.atleast_2d(model.check_q(trajectory.q))
+    Q = np.atleast_2d(model.check_q(trajectory.in_order(model.joint_names)))
     floors = tuple((int(m), float(f)) for m, f in floors)
     if not floors:
         raise ConfigurationError("give at least one floor (mode, f_min_hz)")

@@ -59,7 +59,6 @@ and ``[sizing]``.
 from __future__ import annotations
 
 import functools
-import tomllib
 from dataclasses import dataclass, field
 from typing import Any
 from pathlib import Path
@@ -137,7 +136,8 @@ class AssignmentConfig:
         if "builtin" in self.trajectory:
             return user_trajectory(model, self.trajectory["builtin"])
         if "csv" in self.trajectory:
-            return Trajectory.from_csv(resolve(self.trajectory["csv"], self.folder))
+            return Trajectory.from_csv(resolve(self.trajectory["csv"], self.folder),
+                                       joint_names=model.joint_names)
         if "path" in self.trajectory:
             from pinflex.trajectory.cartesian import path_from_spec
 
@@ -156,13 +156,13 @@ def load_config(path: str | Path) -> AssignmentConfig:
     """
     from pinflex.description.source import read_text
 
-    path = Path(path)
+    from pinflex.description.source import input_path
+    from pinflex.validation import load_toml
+
+    path = input_path(path, "study file", StudyError)
     source = str(path)
     text = read_text(path, "study file", StudyError)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise StudyError(f"{source}: not valid TOML: {exc}") from exc
+    data = load_toml(text, source, StudyError)
     return config_from_data(data, path.parent, source)
 
 
@@ -249,6 +249,40 @@ def config_from_data(data: dict, folder: Path, source: str = "<study>") -> Assig
     )
 
 
+def check_config(cfg: AssignmentConfig, what: str = "the study") -> None:
+    """Check a (possibly changed) study against its robot before any work.
+
+    The checks of :func:`load_config` that need the robot (mode numbers, design names and
+    bounds, joint count of ``q0``, parameter and point-mass names in ``values``), run on an
+    :class:`AssignmentConfig`, e.g. one case of a ``pinflex batch assign --sweep``.
+
+    Raises:
+        StudyError: Listing every problem.
+    """
+    from pinflex.exceptions import PinflexError
+    from pinflex.validation import Problem, raise_problems
+
+    try:
+        facts = _model_facts(cfg.robot, cfg.planar, cfg.joints, cfg.values)
+    except PinflexError as exc:
+        raise StudyError(f"{what}: {exc}") from None
+    data: dict = {
+        "targets": [{"mode": t.mode} for t in cfg.targets],
+        "constraints": {"floors": [{"mode": m} for m, _ in cfg.floors],
+                        "bands": [{"mode": m} for m, _, _ in cfg.bands]},
+        "options": {"report_modes": list(cfg.report_modes)},
+        "expansion": {},
+    }
+    if cfg.baseline is not None:
+        data["options"]["baseline"] = dict(cfg.baseline)
+    if cfg.y0 is not None:
+        data["expansion"]["y0"] = dict(cfg.y0)
+    if cfg.q0 is not None:
+        data["expansion"]["q0"] = list(np.atleast_1d(cfg.q0))
+    problems: list[Problem] = check_against_model(data, facts)
+    raise_problems(what, problems, " in the study")
+
+
 def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=None,
                freq_before_hz=None, progress: bool = False):
     """Build the model and trajectory of a study and solve it.
@@ -271,6 +305,11 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
                          "design mass under [constraints].floors, run pinflex size)")
     model = cfg.build_model() if model is None else model
     traj = cfg.build_trajectory(model) if trajectory is None else trajectory
+    for i, t in enumerate(cfg.targets):
+        n = np.size(t.freq_hz)
+        if np.ndim(t.freq_hz) > 0 and n != traj.n_samples:
+            raise StudyError(f"targets[{i}].freq_hz has {n} values; give one frequency or one "
+                             f"per trajectory sample ({traj.n_samples})")
     baseline = model.check_y(cfg.baseline) if cfg.baseline is not None else None
     loop: dict[str, Any] = {k: v for k, v in (("confirm_tol", cfg.confirm_tol), ("target_tol", cfg.target_tol),
                               ("max_refinements", cfg.max_refinements)) if v is not None}

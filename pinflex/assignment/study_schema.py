@@ -16,44 +16,16 @@ Extending the format is one entry: a key is ``"name": Key(kind, ...)`` in its ta
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 from typing import TypeGuard
 
 from pinflex.exceptions import StudyError
+from pinflex.fields import Field, check_table, check_value
 from pinflex.resources import MAX_TAYLOR_ORDER
 from pinflex.validation import Problem, closest, suggestion
 
-
-@dataclass(frozen=True)
-class Key:
-    """One key of a study table.
-
-    Attributes:
-        kind: 'str', 'bool', 'int', 'float', 'floats' (array of numbers), 'ints', 'mapping'
-            (table of name = number), 'table', 'tables' (array of tables), 'points' (array of
-            [x, y, z]), 'float_or_floats', 'orientation' ("keep", "free" or [r, p, y]),
-            'foreign_table' (a table whose keys another module checks), 'strs' (array of
-            strings).
-        required: Whether the key must be present.
-        gt, ge, le: Bounds of numbers (of every entry for arrays and mappings).
-        choices: Allowed strings.
-        keys: Keys of a 'table' or of each entry of 'tables'.
-        min_items: Fewest entries of an array.
-        rules: Checks ``rule(table, report)`` of a table's values.
-        doc: One line of documentation.
-    """
-
-    kind: str
-    required: bool = False
-    gt: float | None = None
-    ge: float | None = None
-    le: float | None = None
-    choices: tuple[str, ...] = ()
-    keys: Mapping[str, Key] = field(default_factory=dict)
-    min_items: int = 0
-    rules: tuple[Callable[[dict, Callable[[str, str], None]], None], ...] = ()
-    doc: str = ""
+#: A key of a study table is one field of the schema engine (:mod:`pinflex.fields`).
+Key = Field
 
 
 def _one_trajectory(table: dict, report) -> None:
@@ -69,77 +41,192 @@ def _band_order(table: dict, report) -> None:
         report("low_hz", f"low_hz = {lo:g} must be below high_hz = {hi:g}")
 
 
-_MODE = Key("int", required=True, ge=1, doc="non-rigid mode number, 1 = lowest")
+def _one_per_mode(what: str):
+    def rule(entries, report) -> None:
+        seen: dict[int, int] = {}
+        for i, e in enumerate(entries if isinstance(entries, list) else []):
+            m = e.get("mode") if isinstance(e, dict) else None
+            if isinstance(m, int) and not isinstance(m, bool):
+                if m in seen:
+                    report(f"[{i}].mode", f"mode {m} already has a {what} "
+                           f"([{seen[m]}]); give one {what} per mode")
+                else:
+                    seen[m] = i
+    return rule
+
+
+def _some_weight(entries, report) -> None:
+    weights = [e.get("weight", 1.0) for e in entries if isinstance(e, dict)]
+    if weights and all(_number(w) and w == 0.0 for w in weights):
+        report("", "every target has weight 0, so the assignment has nothing to do; give at "
+               "least one target a positive weight")
+
+
+def _damping_kinds(table: dict, report) -> None:
+    kind = table.get("kind")
+    if kind == "modal" and not table.get("ratios"):
+        report("ratios", "kind = 'modal' needs ratios = [...]")
+    if kind == "rayleigh" and "ratios" in table:
+        report("ratios", "belongs to kind = 'modal'")
+    if kind == "modal" and ({"alpha", "beta"} & set(table)):
+        report("", "alpha and beta belong to kind = 'rayleigh'")
+
+
+def _simulation_rules(table: dict, report) -> None:
+    damping = table.get("damping")
+    if table.get("drive") == "torque" and isinstance(damping, dict) and \
+            damping.get("kind") == "modal":
+        report("damping", "drive = 'torque' takes Rayleigh damping or none")
+    for key in ("rtol", "atol", "step_s", "kp", "kd"):
+        if key in table and table.get("drive", "prescribed") == "prescribed":
+            report(key, "belongs to drive = 'torque'")
+    if table.get("drive") == "torque" and table.get("terms") == "full":
+        report("terms", "'full' is for drive = 'prescribed' (the torque drive integrates "
+               "eq. (1))")
+
+
+_MODE = Field("int", required=True, ge=1, le=10_000, doc="non-rigid mode number, 1 = lowest")
+
+
+def _hz(**kwargs) -> Field:
+    """A frequency [Hz] (at most 1 GHz)."""
+    return Field(unit="Hz", le=1e9, **kwargs)
+
+_ACCEL = Field("float", ge=-1e3, le=1e3, unit="m/s^2")
+
+#: Largest output rate of a simulation [Hz] and longest simulated time after the motion
+#: [s]; a request is also bounded by its memory (samples x coordinates, see
+#: :func:`pinflex.dynamics.study.check_simulation_size`).
+MAX_SAMPLE_HZ = 1e6
+MAX_AFTER_S = 1e4
+
+#: The ``[simulation]`` table of a study (read by ``pinflex simulate``).
+SIMULATION: dict[str, Field] = {
+    "drive": Field("choice", choices=("prescribed", "torque"),
+                   doc="'prescribed' joint motion, or 'torque': rigid computed torque + PD"),
+    "after_s": Field(gt=0.0, le=MAX_AFTER_S, unit="s",
+                     doc="simulated time after the last trajectory sample (default 0.5)"),
+    "damping": Field("either", doc="'none' or a table with kind = 'rayleigh' or 'modal'",
+                     options=(
+                         Field("choice", choices=("none",)),
+                         Field("table", rules=(_damping_kinds,), keys={
+                             "kind": Field("choice", required=True,
+                                           choices=("rayleigh", "modal"), doc="damping law"),
+                             "alpha": Field(ge=0.0, le=1e6, unit="1/s",
+                                            doc="Rayleigh: alpha M"),
+                             "beta": Field(ge=0.0, le=1.0, unit="s", doc="Rayleigh: beta K"),
+                             "ratios": Field("array", min_items=1, max_items=10_000,
+                                             item=Field(ge=0.0, lt=1.0),
+                                             doc="modal damping ratios, lowest mode first"),
+                         }),
+                     )),
+    "gravity": Field("vec3", ge=-1e3, le=1e3, unit="m/s^2",
+                     doc="gravity in world axes (default [0, 0, 0])"),
+    "frame": Field("name", doc="output link (default 'tool')"),
+    "point": Field("vec3", ge=-1e3, le=1e3, unit="m", doc="output point on the frame"),
+    "sample_hz": Field(gt=0.0, le=MAX_SAMPLE_HZ, unit="Hz", doc="output rate (default 5000)"),
+    "rtol": Field(gt=0.0, lt=1.0, doc="torque drive: relative tolerance (default 1e-4)"),
+    "atol": Field(gt=0.0, le=1.0, unit="m, rad", doc="torque drive: absolute tolerance "
+                  "(default 1e-9)"),
+    "rho_inf": Field(ge=0.0, le=1.0, doc="generalized-alpha high-frequency spectral radius"),
+    "tol": Field(ge=1e-10, lt=1.0, why="a relative step error below 1e-10 is under the "
+                 "round-off of the time integration and is never reached",
+                 doc="prescribed drive: Richardson step-error tolerance (relative)"),
+    "step_s": Field(gt=0.0, le=1.0, unit="s", doc="torque drive: fixed step"),
+    "kp": Field(ge=0.0, le=1e12, unit="N m/rad", doc="torque drive: PD stiffness"),
+    "kd": Field(ge=0.0, le=1e12, unit="N m s/rad", doc="torque drive: PD damping"),
+    "terms": Field("choice", choices=("eq1", "full"),
+                   doc="prescribed drive: 'eq1' (default) or 'full' (centrifugal, Euler and "
+                   "geometric-stiffness terms, pinflex.dynamics.speed)"),
+    "strict": Field("bool", doc="refuse a motion too fast for eq. (1) instead of warning"),
+    "validity_threshold": Field(gt=0.0, le=1e3, doc="threshold of the validity indicator "
+                                "(default 0.1, pinflex.erls.validity)"),
+}
 
 #: The study format: top-level keys and tables.
-STUDY: dict[str, Key] = {
-    "robot": Key("str", required=True,
-                 doc="annotated URDF or overlay, relative to the study or builtin:NAME"),
-    "planar": Key("bool", doc="keep in-plane elastic dofs only (default false)"),
-    "joints": Key("str", choices=("free", "locked", "annotated"),
-                  doc="joint conditions: annotated (the file's <pinflex:joint>, the default), "
-                  "or the overrides free and locked"),
-    "values": Key("mapping", doc="parameters and point masses set before the study"),
-    "simulation": Key("foreign_table", doc="time simulation settings (checked by "
-                      "pinflex simulate)"),
-    "trajectory": Key("table", rules=(_one_trajectory,), doc="the motion", keys={
-        "builtin": Key("str", choices=("benchmark_a",), doc="a shipped trajectory"),
-        "csv": Key("str", doc="CSV file: t, then one column per joint"),
-        "path": Key("table", doc="a workspace path solved by inverse kinematics", keys={
-            "frame": Key("str", required=True, doc="frame that follows the path"),
-            "waypoints": Key("points", required=True, min_items=1, doc="points [m]"),
-            "relative": Key("bool", doc="waypoints are offsets from the start"),
-            "start_q": Key("floats", doc="joint values at the start"),
-            "samples": Key("int", ge=2, le=100_000, doc="number of samples"),
-            "duration_s": Key("float", gt=0.0, doc="duration [s]"),
-            "profile": Key("str", choices=("minimum_jerk", "uniform"), doc="timing law"),
-            "orientation": Key("orientation", doc="'keep', 'free' or roll-pitch-yaw [rad]"),
-            "on_limits": Key("str", choices=("raise", "warn"), doc="joint-limit policy"),
+STUDY: dict[str, Field] = {
+    "robot": Field("str", required=True,
+                   doc="annotated URDF or overlay, relative to the study or builtin:NAME"),
+    "planar": Field("bool", doc="keep in-plane elastic dofs only (default false)"),
+    "joints": Field("choice", choices=("free", "locked", "annotated"),
+                    doc="joint conditions: annotated (the file's <pinflex:joint>, the default), "
+                    "or the overrides free and locked"),
+    "values": Field("mapping", item=Field(), doc="parameters and point masses set before the "
+                    "study (checked against the robot)"),
+    "simulation": Field("table", keys=SIMULATION, rules=(_simulation_rules,),
+                        doc="time simulation settings (used by pinflex simulate)"),
+    "trajectory": Field("table", rules=(_one_trajectory,), doc="the motion", keys={
+        "builtin": Field("choice", choices=("benchmark_a",), doc="a shipped trajectory"),
+        "csv": Field("str", doc="CSV file: t, then one column per joint (by name)"),
+        "path": Field("table", doc="a workspace path solved by inverse kinematics", keys={
+            "frame": Field("str", required=True, doc="frame that follows the path"),
+            "waypoints": Field("array", required=True, min_items=1, max_items=10_000,
+                               item=Field("vec3", ge=-1e3, le=1e3, unit="m"),
+                               doc="points [m]"),
+            "relative": Field("bool", doc="waypoints are offsets from the start"),
+            "start_q": Field("array", max_items=1000, item=Field(ge=-1e6, le=1e6),
+                             doc="joint values at the start"),
+            "samples": Field("int", ge=2, le=20_000, doc="number of samples"),
+            "duration_s": Field(gt=0.0, le=1e6, unit="s", doc="duration"),
+            "profile": Field("choice", choices=("minimum_jerk", "uniform"), doc="timing law"),
+            "orientation": Field("either", doc="'keep', 'free' or roll-pitch-yaw [rad]",
+                                 options=(Field("choice", choices=("keep", "free")),
+                                          Field("vec3", ge=-1e3, le=1e3, unit="rad"))),
+            "on_limits": Field("choice", choices=("raise", "warn"), doc="joint-limit policy"),
         }),
     }),
-    "expansion": Key("table", doc="the Taylor model", keys={
-        "q0": Key("floats", doc="expansion pose (default: the middle sample)"),
-        "y0": Key("mapping", ge=0.0, doc="expansion design {name = value} (each in its "
-                  "variable's unit)"),
-        "order": Key("int", ge=0, le=MAX_TAYLOR_ORDER, doc="Taylor order"),
-        "quantity": Key("str", choices=("freq_hz", "eigval"), doc="expanded quantity"),
-        "design": Key("strs", doc="design variables to choose (default: all)"),
+    "expansion": Field("table", doc="the Taylor model", keys={
+        "q0": Field("array", max_items=1000, item=Field(ge=-1e6, le=1e6),
+                    doc="expansion pose (default: the middle sample)"),
+        "y0": Field("mapping", item=Field(ge=0.0), doc="expansion design {name = value} (each "
+                    "in its variable's unit)"),
+        "order": Field("int", ge=0, le=MAX_TAYLOR_ORDER,
+                       why="the maximum Taylor order; cover a long motion with several "
+                       "expansion points instead", doc="Taylor order"),
+        "quantity": Field("choice", choices=("freq_hz", "eigval"), doc="expanded quantity"),
+        "design": Field("array", min_items=1, max_items=1000, item=Field("str"),
+                        doc="design variables to choose (default: all)"),
     }),
-    "targets": Key("tables", min_items=1, doc="wanted frequencies (pinflex assign)", keys={
+    "targets": Field("tables", min_items=1, max_items=1000,
+                     doc="wanted frequencies (pinflex assign)", keys={
         "mode": _MODE,
-        "freq_hz": Key("float_or_floats", required=True, gt=0.0,
-                       doc="target [Hz], constant or one per sample"),
-        "weight": Key("float", ge=0.0, doc="weight in the cost (default 1)"),
+        "freq_hz": Field("either", required=True, doc="target [Hz], constant or one per "
+                         "sample", options=(_hz(gt=0.0),
+                                            Field("array", min_items=1,
+                                                  item=_hz(gt=0.0)))),
+        "weight": Field(ge=0.0, le=1e12, doc="weight in the cost (default 1)"),
     }),
-    "constraints": Key("table", doc="QP constraints", keys={
-        "mass_budget_kg": Key("float", doc="largest total added mass [kg] (below the "
-                              "lower bounds it is infeasible, reported by the QP)"),
-        "floors": Key("tables", doc="lowest allowed frequencies", keys={
-            "mode": _MODE, "freq_hz": Key("float", required=True, gt=0.0, doc="floor [Hz]"),
+    "constraints": Field("table", doc="QP constraints", keys={
+        "mass_budget_kg": Field(ge=-1e9, le=1e9, unit="kg",
+                                doc="largest total added mass (below the lower bounds it is "
+                                "infeasible, reported by the QP)"),
+        "floors": Field("tables", max_items=1000, doc="lowest allowed frequencies", keys={
+            "mode": _MODE, "freq_hz": _hz(required=True, gt=0.0, doc="floor"),
         }),
-        "bands": Key("tables", rules=(_band_order,), doc="forbidden frequency bands", keys={
+        "bands": Field("tables", max_items=1000, rules=(_band_order,),
+                       doc="forbidden frequency bands", keys={
             "mode": _MODE,
-            "low_hz": Key("float", required=True, gt=0.0, doc="band start [Hz]"),
-            "high_hz": Key("float", required=True, gt=0.0, doc="band end [Hz]"),
+            "low_hz": _hz(required=True, gt=0.0, doc="band start"),
+            "high_hz": _hz(required=True, gt=0.0, doc="band end"),
         }),
     }),
-    "options": Key("table", doc="reporting and refinement", keys={
-        "baseline": Key("mapping", ge=0.0, doc="the 'before' design {name = value}"),
-        "refine": Key("bool", doc="re-expand at the answer and solve again"),
-        "report_modes": Key("ints", ge=1, doc="further modes to report"),
-        "confirm_tol": Key("float", gt=0.0, le=1.0, doc="largest relative difference "
-                           "between the answer's predicted and exact frequencies (default "
-                           "0.005)"),
-        "target_tol": Key("float", gt=0.0, doc="largest exact target error for the "
-                          "status 'met' (default 0.05)"),
-        "max_refinements": Key("int", ge=0, le=100, doc="most re-expansions (default 8)"),
+    "options": Field("table", doc="reporting and refinement", keys={
+        "baseline": Field("mapping", item=Field(ge=0.0), doc="the 'before' design "
+                          "{name = value}"),
+        "refine": Field("bool", doc="re-expand at the answer and solve again"),
+        "report_modes": Field("array", max_items=1000, item=Field("int", ge=1, le=10_000),
+                              doc="further modes to report"),
+        "confirm_tol": Field(gt=0.0, le=1.0, doc="largest relative difference between the "
+                             "answer's predicted and exact frequencies (default 0.005)"),
+        "target_tol": Field(gt=0.0, le=1e3, doc="largest exact target error for the status "
+                            "'met' (default 0.05)"),
+        "max_refinements": Field("int", ge=0, le=100, doc="most re-expansions (default 8)"),
     }),
-    "sizing": Key("table", doc="least design mass under the floors (pinflex size)", keys={
-        "step_fraction": Key("float", gt=0.0, le=1.0, doc="trust region as a fraction of "
-                             "the estimated radius (default 0.5)"),
-        "max_expansions": Key("int", ge=1, le=1000, doc="most re-expansions (default 30)"),
-        "tol_hz": Key("float", gt=0.0, doc="floor tolerance on the exact model [Hz] "
-                      "(default 1e-6)"),
+    "sizing": Field("table", doc="least design mass under the floors (pinflex size)", keys={
+        "step_fraction": Field(gt=0.0, le=1.0, doc="trust region as a fraction of the "
+                               "estimated radius (default 0.5)"),
+        "max_expansions": Field("int", ge=1, le=1000, doc="most re-expansions (default 30)"),
+        "tol_hz": _hz(gt=0.0, doc="floor tolerance on the exact model (default 1e-6)"),
     }),
 }
 
@@ -148,138 +235,25 @@ def _number(x) -> TypeGuard[float]:
     return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
 
 
-def _type_name(value) -> str:
-    if isinstance(value, bool):
-        return f"the boolean {str(value).lower()}"
-    if isinstance(value, str):
-        return f"the string {value!r}"
-    if isinstance(value, int | float):
-        return f"the number {value!r}"
-    if isinstance(value, list):
-        return "an array"
-    if isinstance(value, dict):
-        return "a table"
-    return type(value).__name__
+def _problems(error=StudyError):
+    problems: list[Problem] = []
+
+    def report(where, message, level):
+        problems.append(Problem(where, message, error))
+
+    return problems, report
 
 
-class _StudyChecker:
-    def __init__(self) -> None:
-        self.problems: list[Problem] = []
-
-    def add(self, where: str, message: str) -> None:
-        self.problems.append(Problem(where, message, StudyError))
-
-    def table(self, data, spec: Mapping[str, Key], where: str, rules=()) -> None:
-        if not isinstance(data, dict):
-            self.add(where, f"expected a table, got {_type_name(data)}")
-            return
-        for key in data:
-            if key not in spec:
-                self.add(_join(where, key), f"unknown key in {where or 'the study'}; "
-                         + suggestion(key, spec))
-        for key, k in spec.items():
-            if key not in data:
-                if k.required:
-                    self.add(_join(where, key), "is missing")
-                continue
-            self.value(data[key], k, _join(where, key))
-        for rule in rules:
-            rule(data, lambda key, msg: self.add(_join(where, key) if key else where, msg))
-
-    def value(self, value, k: Key, where: str) -> None:
-        kind = k.kind
-        if kind == "table":
-            self.table(value, k.keys, where, k.rules)
-        elif kind == "tables":
-            if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
-                self.add(where, f"expected an array of tables ([[{where}]]), got "
-                         f"{_type_name(value)}")
-                return
-            if len(value) < k.min_items:
-                self.add(where, f"needs at least {k.min_items} entry")
-            for i, entry in enumerate(value):
-                self.table(entry, k.keys, f"{where}[{i}]", k.rules)
-        elif kind == "foreign_table":
-            if not isinstance(value, dict):
-                self.add(where, f"expected a table, got {_type_name(value)}")
-        elif kind == "bool":
-            if not isinstance(value, bool):
-                hint = " (a TOML boolean is written without quotes)" if isinstance(
-                    value, str) else ""
-                self.add(where, f"expected true or false, got {_type_name(value)}{hint}")
-        elif kind == "strs":
-            if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-                self.add(where, f"expected an array of strings, got {_type_name(value)}")
-            elif not value:
-                self.add(where, "must not be empty")
-        elif kind == "str":
-            if not isinstance(value, str):
-                self.add(where, f"expected a string, got {_type_name(value)}")
-            elif k.choices and value not in k.choices:
-                self.add(where, f"{value!r} is not one of "
-                         + ", ".join(repr(c) for c in k.choices) + "; "
-                         + suggestion(value, k.choices))
-        elif kind in ("int", "float"):
-            self.number(value, k, where)
-        elif kind in ("floats", "ints", "float_or_floats"):
-            if kind == "float_or_floats" and not isinstance(value, list):
-                self.number(value, k, where)
-                return
-            if not isinstance(value, list):
-                self.add(where, f"expected an array of numbers, got {_type_name(value)}")
-                return
-            if len(value) < max(k.min_items, 1 if kind == "float_or_floats" else 0):
-                self.add(where, "must not be empty")
-            for i, v in enumerate(value):
-                self.number(v, Key("int" if kind == "ints" else "float", gt=k.gt, ge=k.ge,
-                                   le=k.le), f"{where}[{i}]")
-        elif kind == "mapping":
-            if not isinstance(value, dict):
-                self.add(where, f"expected a table {{ name = value }}, got {_type_name(value)}")
-                return
-            for name, v in value.items():
-                self.number(v, Key("float", ge=k.ge, le=k.le), _join(where, name))
-        elif kind == "points":
-            if not isinstance(value, list) or len(value) < k.min_items:
-                self.add(where, "expected an array of [x, y, z] points")
-                return
-            for i, p in enumerate(value):
-                if not isinstance(p, list) or len(p) != 3:
-                    self.add(f"{where}[{i}]", "expected [x, y, z]")
-                    continue
-                for j, v in enumerate(p):
-                    self.number(v, Key("float"), f"{where}[{i}][{j}]")
-        elif kind == "orientation":
-            if isinstance(value, str):
-                if value not in ("keep", "free"):
-                    self.add(where, f"{value!r} is not 'keep', 'free' or [roll, pitch, yaw]; "
-                             + suggestion(value, ("keep", "free")))
-            elif isinstance(value, list) and len(value) == 3:
-                for j, v in enumerate(value):
-                    self.number(v, Key("float"), f"{where}[{j}]")
-            else:
-                self.add(where, "expected 'keep', 'free' or [roll, pitch, yaw]")
-        else:  # pragma: no cover - a schema typo
-            raise AssertionError(kind)
-
-    def number(self, value, k: Key, where: str) -> None:
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            self.add(where, f"expected a number, got {_type_name(value)}")
-            return
-        if k.kind == "int" and not isinstance(value, int):
-            self.add(where, f"expected a whole number, got {value!r}")
-            return
-        if not math.isfinite(value):
-            self.add(where, f"must be finite, got {value!r}")
-            return
-        if k.gt is not None and not value > k.gt:
-            self.add(where, f"{value!r} must be above {k.gt:g}")
-        elif k.ge is not None and not value >= k.ge:
-            self.add(where, f"{value!r} must be >= {k.ge:g}")
-        elif k.le is not None and not value <= k.le:
-            extra = (" (the maximum Taylor order; cover a long motion with several expansion "
-                     "points instead)") if k.le == MAX_TAYLOR_ORDER else ""
-            self.add(where, f"{value!r} must be at most {k.le:g}{extra}")
+def _list_rules(data: dict, report) -> None:
+    """Rules over arrays of tables (one target / floor per mode, some positive weight)."""
+    targets = data.get("targets")
+    if isinstance(targets, list):
+        _one_per_mode("target")(targets, lambda k, m: report(f"targets{k}", m, "error"))
+        _some_weight(targets, lambda k, m: report("targets" + k, m, "error"))
+    cons = data.get("constraints")
+    if isinstance(cons, dict) and isinstance(cons.get("floors"), list):
+        _one_per_mode("floor")(cons["floors"],
+                               lambda k, m: report(f"constraints.floors{k}", m, "error"))
 
 
 def _join(where: str, key: str) -> str:
@@ -288,15 +262,16 @@ def _join(where: str, key: str) -> str:
 
 def check_study(data: dict) -> list[Problem]:
     """Problems of a study's TOML data against :data:`STUDY` (an empty list when valid)."""
-    checker = _StudyChecker()
-    checker.table(data, STUDY, "")
-    return checker.problems
+    problems, report = _problems()
+    check_table(data, STUDY, "", report)
+    _list_rules(data, report)
+    return problems
 
 
 def check_override(key: str, value) -> list[Problem]:
     """Problems of one dotted-key value (``expansion.order``, ``targets.0.freq_hz``)."""
-    spec: Mapping[str, Key] = STUDY
-    k: Key | None = None
+    spec: Mapping[str, Field] = STUDY
+    k: Field | None = None
     parts = key.split(".")
     i = 0
     while i < len(parts):
@@ -306,7 +281,7 @@ def check_override(key: str, value) -> list[Problem]:
             i += 1
             continue
         if k is not None and k.kind == "mapping":
-            k = Key("float", ge=k.ge, le=k.le)
+            k = k.item or Field()
             break
         if part not in spec:
             return [Problem(key, f"unknown key '{part}'; " + suggestion(part, spec), StudyError)]
@@ -315,9 +290,9 @@ def check_override(key: str, value) -> list[Problem]:
         i += 1
     if k is None:
         return [Problem(key, "names no study key", StudyError)]
-    checker = _StudyChecker()
-    checker.value(value, k, key)
-    return checker.problems
+    problems, report = _problems()
+    check_value(value, k, key, report)
+    return problems
 
 
 def check_against_model(data: dict, model, where_robot: str = "robot") -> list[Problem]:

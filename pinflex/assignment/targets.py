@@ -13,8 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex.erls import FlexibleModel
-from pinflex.exceptions import ConfigurationError, InvalidTrajectory
+from pinflex.exceptions import ConfigurationError
 from pinflex.trajectory import Trajectory
+from pinflex.validation import float_array
 
 __all__ = ["Target", "check_trajectory_limits", "target_matrix"]
 
@@ -39,7 +40,12 @@ def target_matrix(targets: Sequence[Target], ns: int) -> np.ndarray:
     """Target frequencies (n_targets, ns) [Hz] of ``targets`` on ``ns`` samples (checked)."""
     out = np.empty((len(targets), ns))
     for i, t in enumerate(targets):
-        f = np.broadcast_to(np.asarray(t.freq_hz, dtype=float), (ns,))
+        f = float_array(t.freq_hz, f"the target of mode {t.mode}")
+        if f.ndim > 1 or f.size not in (1, ns):
+            raise ConfigurationError(
+                f"the target of mode {t.mode} has {f.size} frequencies; give one or one per "
+                f"trajectory sample ({ns})")
+        f = np.broadcast_to(f.reshape(-1), (ns,))
         if np.any(~np.isfinite(f)) or np.any(f <= 0):
             raise ConfigurationError(f"target of mode {t.mode} must be positive frequencies [Hz]")
         out[i] = f
@@ -63,15 +69,11 @@ def check_trajectory_limits(model: FlexibleModel, trajectory: Trajectory) -> Non
     Raises:
         InvalidTrajectory: If the samples do not have one column per joint of the model.
     """
-    q = np.asarray(trajectory.q)
-    if q.ndim != 2 or q.shape[1] != len(model.joint_names):
-        raise InvalidTrajectory(
-            f"the trajectory has samples of shape {q.shape}; the model needs (n_samples, "
-            f"{len(model.joint_names)}): one column per joint {list(model.joint_names)}")
+    q = trajectory.in_order(model.joint_names)
     from pinflex.trajectory.cartesian import warn_if_degrees
 
     joints = [model.description.joints[name] for name in model.joint_names]
-    in_pin = Trajectory(trajectory.times_s, trajectory.q @ model.coord_map.T, model.joint_names)
+    in_pin = Trajectory(trajectory.times_s, q @ model.coord_map.T, model.joint_names)
     warn_if_degrees(model, in_pin.q)
     in_pin.check_limits([j.lower - 1e-9 for j in joints], [j.upper + 1e-9 for j in joints])
 

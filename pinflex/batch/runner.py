@@ -131,9 +131,13 @@ def connect(scheduler: str | None = None, workers: int | None = None):
         except (OSError, TimeoutError, ValueError, TypeError) as exc:
             raise BatchError(f"no Dask scheduler answers at {scheduler} ({exc}); start one "
                              "with `dask scheduler` and pass the address it prints") from exc
-    n = int(workers) if workers is not None else (os.cpu_count() or 1)
-    if n < 1:
-        raise BatchError(f"--workers {n} must be >= 1")
+    cores = os.cpu_count() or 1
+    n = int(workers) if workers is not None else cores
+    top = max(8, 4 * cores)  # each worker is a process; more only compete for the cores
+    if not 1 <= n <= top:
+        raise BatchError(f"--workers {n} must be between 1 and {top} (4 per core on this "
+                         f"machine's {cores}); for more, start a Dask cluster and pass "
+                         "--scheduler")
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                            host="127.0.0.1", dashboard_address="127.0.0.1:0",
                            silence_logs=logging.ERROR)

@@ -168,8 +168,14 @@ class ResultStore:
         Raises:
             StoreError: The file is not a usable SQLite store or has another schema version.
         """
-        self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        from pinflex.exceptions import OutputError
+        from pinflex.outputs import check_file_target, output_dir
+
+        try:
+            self.path = check_file_target(path, "--store")
+            output_dir(self.path.parent, "store folder")
+        except OutputError as exc:
+            raise StoreError(str(exc)) from None
         try:
             self._db = sqlite3.connect(self.path, timeout=timeout_s, isolation_level=None)
             self._db.execute("PRAGMA journal_mode=WAL")

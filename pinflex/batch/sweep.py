@@ -32,9 +32,9 @@ import copy
 import hashlib
 import itertools
 import json
+import math
 import re
 import time
-import tomllib
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -86,11 +86,15 @@ def split_values(text: str) -> list[str]:
 
 
 def parse_value(text: str):
-    """A TOML literal, or the bare string if the text is not one."""
+    """A TOML literal (numbers by pinflex's grammar), or the bare string if it is not one."""
+    from pinflex.validation import load_toml
+
     try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
-        return text
+        return load_toml(f"v = {text}", "--sweep", InvalidSweep)["v"]
+    except InvalidSweep as exc:
+        if "not valid TOML" in str(exc):
+            return text
+        raise InvalidSweep(f"--sweep value {text!r}: {str(exc).split(': ', 2)[-1]}") from None
 
 
 def parse_sweeps(options: list[str] | None) -> list[tuple[str, list]]:
@@ -123,7 +127,17 @@ def parse_sweeps(options: list[str] | None) -> list[tuple[str, list]]:
 def sweep_cases(sweeps: list[tuple[str, list]]) -> list[dict]:
     """Cartesian product of the sweeps, first sweep slowest: a list of ``{key: value}``."""
     keys = [k for k, _ in sweeps]
+    count = math.prod(len(v) for _, v in sweeps)
+    if count > MAX_CASES:  # counted before any case is built or checked
+        sizes = " x ".join(str(len(v)) for _, v in sweeps)
+        raise InvalidSweep(f"--sweep gives {count} cases ({sizes}), more than the "
+                           f"{MAX_CASES} one batch may hold; split the sweep into several "
+                           "runs on the same --store")
     return [dict(zip(keys, combo)) for combo in itertools.product(*(v for _, v in sweeps))]
+
+
+#: Most cases of one ``pinflex batch assign`` (each is a full assignment).
+MAX_CASES = 10_000
 
 
 def _index(items: list, index: str, key: str) -> int:
@@ -232,12 +246,19 @@ def plan_cases(config_path: str | Path, sweeps: list[tuple[str, list]]):
         ConfigurationError: If the study file is invalid.
         InvalidSweep: If a sweep does not apply to it.
     """
-    from pinflex.assignment.study import load_config
+    from pinflex.assignment.study import check_config, load_config
+    from pinflex.exceptions import StudyError
 
     base = load_config(config_path)
     out = []
     for overrides in sweep_cases(sweeps):
         cfg = apply_overrides(base, overrides)
+        if overrides:
+            try:
+                check_config(cfg, "--sweep " + ", ".join(f"{k}={v!r}"
+                                                         for k, v in overrides.items()))
+            except StudyError as exc:
+                raise InvalidSweep(str(exc)) from None
         config = case_config(Path(config_path), cfg, overrides)
         out.append((config_hash(config), config, cfg, overrides))
     return out

@@ -53,6 +53,16 @@ def beam_seed(seed: int, index: int) -> int:
     return int(state[0]) >> 1
 
 
+#: Most beams of one ``pinflex batch prbdm`` study (rows of the store).
+MAX_BEAMS = 1_000_000
+#: Most multistart points per search.
+MAX_STARTS = 1000
+#: Most random interior planform vertices.
+MAX_SECTIONS = 1000
+#: Most joints of an nR model (and reference modes).
+MAX_LINKS = 64
+
+
 @dataclass(frozen=True)
 class PrbdmStudy:
     """Settings of a random-beam PRBDM study.
@@ -97,8 +107,16 @@ class PrbdmStudy:
         object.__setattr__(self, "links", links)
         object.__setattr__(self, "modes", modes)
         object.__setattr__(self, "alphas", tuple(float(a) for a in self.alphas))
-        if self.seed < 0 or self.n_beams < 0:
-            raise BatchError(f"--seed {self.seed} and --beams {self.n_beams} must be >= 0")
+        if self.seed < 0:
+            raise BatchError(f"--seed {self.seed} must be >= 0")
+        for value, name, top in ((self.n_beams, "--beams", MAX_BEAMS),
+                                 (self.n_starts, "--starts", MAX_STARTS),
+                                 (self.n_sections, "--sections", MAX_SECTIONS),
+                                 (max(links, default=1), "--links", MAX_LINKS),
+                                 (self.truth_modes, "--truth-modes", MAX_LINKS)):
+            low = 0 if name == "--sections" else 1
+            if not low <= value <= top:  # counted before any work: each unit is a full fit
+                raise BatchError(f"{name} {value} must be between {low} and {top}")
         if not links or min(links) < 1:
             raise BatchError(f"--links {list(links)}: give one or more joint counts >= 1")
         if len(modes) != len(links):

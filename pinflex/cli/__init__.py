@@ -37,8 +37,38 @@ SUBCOMMANDS: list[str] = [
 ]
 
 
+def _number(text: str) -> float:
+    """A command-line number read by pinflex's number grammar (``type=float`` options)."""
+    from pinflex.validation import parse_number
+
+    try:
+        return parse_number(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _whole(text: str) -> int:
+    """A command-line whole number read by pinflex's grammar (``type=int`` options)."""
+    from pinflex.validation import parse_int
+
+    try:
+        return parse_int(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 class _Parser(argparse.ArgumentParser):
-    """An argument parser whose usage errors are one line, like every other error."""
+    """An argument parser whose usage errors are one line, like every other error.
+
+    Options declared ``type=float`` or ``type=int`` are read by pinflex's one number grammar
+    (:func:`pinflex.validation.parse_number`): ``nan``, ``inf``, ``1_0``, Unicode digits and
+    non-ASCII spaces, which Python's ``float()`` and ``int()`` accept, are usage errors.
+    """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.register("type", float, _number)
+        self.register("type", int, _whole)
 
     def error(self, message: str):
         """Print ``pinflex SUBCOMMAND: error: ...`` and the way to help; exit with status 2."""
@@ -91,7 +121,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     from pinflex.exceptions import PinflexError
 
     words = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser(chosen_subcommand(words)).parse_args(words)
+    try:
+        args = build_parser(chosen_subcommand(words)).parse_args(words)
+    except SystemExit as exc:  # usage errors (one line printed), --help, --version
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    empty = [i for i, w in enumerate(words) if w == ""]
+    if empty:  # an empty file name, address or value typed on the command line is never meant
+        i = empty[0]
+        name = words[i - 1] if i and words[i - 1].startswith("-") else "an argument"
+        print(f"pinflex {args.command}: error: an empty value was given to {name}",
+              file=sys.stderr)
+        return 2
+    import warnings
+
+    shown = warnings.showwarning
+    if not args.debug:
+        warnings.showwarning = _one_line_warning
     try:
         return int(args.func(args) or 0)
     except PinflexError as exc:
@@ -104,6 +149,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print("pinflex: interrupted", file=sys.stderr)
         return 130
+    except MemoryError as exc:
+        if args.debug:
+            raise
+        # an allocation beyond this machine's memory that no estimate caught
+        print(f"pinflex: error: out of memory ({exc or 'MemoryError'}): the request is too "
+              "large for this machine; use fewer elements, samples, modes or poses",
+              file=sys.stderr)
+        return 2
     except BrokenPipeError:
         # the reader closed the pipe: not an error of ours; stop writing, also at exit
         import os
@@ -117,3 +170,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"pinflex: internal error: {type(exc).__name__}: {exc} "
               "(rerun with --debug for the traceback)", file=sys.stderr)
         return 1
+    finally:
+        warnings.showwarning = shown
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line on stderr, ``pinflex: warning: Category: message``."""
+    text = " ".join(str(message).split())
+    print(f"pinflex: warning: {category.__name__}: {text}", file=sys.stderr)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 from pinflex.cli.common import add_model_arguments, parse_values
@@ -154,11 +153,14 @@ def cmd_assign(args: argparse.Namespace) -> int:
     for key in ("confirm_tol", "target_tol"):
         value = getattr(args, key)
         if value is not None:
-            if not value > 0:
+            from pinflex.assignment.study_schema import STUDY
+
+            top = STUDY["options"].keys[key].le  # the study key's bounds: (0, top]
+            if not 0 < value <= top:
                 from pinflex.exceptions import ConfigurationError
 
                 raise ConfigurationError(f"--{key.replace('_', '-')} {value}: give a positive "
-                                         "fraction")
+                                         f"fraction up to {top:g}")
             setattr(cfg, key, value)
     import sys
 
@@ -170,8 +172,10 @@ def cmd_assign(args: argparse.Namespace) -> int:
                                          and sys.stderr.isatty())
     except AssignmentInfeasible as exc:
         if args.json:
-            print(json.dumps({"status": "infeasible", "error": str(exc),
-                              "refused_by": exc.refused_by}))
+            from pinflex.outputs import json_text
+
+            print(json_text({"status": "infeasible", "error": str(exc),
+                             "refused_by": exc.refused_by}))
         print(f"pinflex: no feasible design: {exc}", file=sys.stderr)
         return EXIT_NOT_MET
     total = time.perf_counter() - t0
@@ -195,7 +199,9 @@ def cmd_assign(args: argparse.Namespace) -> int:
     out.update(data.to_dict())
     code = 0 if result.ok else EXIT_NOT_MET
     if args.json:
-        print(json.dumps(out))
+        from pinflex.outputs import json_text
+
+        print(json_text(out))
         return code
     units = {d.name: d.unit for d in model.design}
     print("design: " + ", ".join(f"{k} = {v:.6g} {units[k]}".rstrip()

@@ -16,6 +16,8 @@ def parse_values(items: Sequence[str] | None) -> dict[str, float]:
         name, sep, value = item.partition("=")
         if not sep:
             raise ConfigurationError(f"--set expects NAME=VALUE, got '{item}'")
+        if name.strip() in out:
+            raise ConfigurationError(f"--set {name.strip()} is given twice; give each name once")
         try:
             out[name.strip()] = parse_number(value)
         except ValueError as exc:
@@ -24,6 +26,22 @@ def parse_values(items: Sequence[str] | None) -> dict[str, float]:
 
 
 JOINT_CHOICES = ("free", "locked", "annotated")
+
+
+def joint_value(text: str) -> float:
+    """A ``--q`` value: a number of the grammar, at most 1e6 in size [rad or m]."""
+    import argparse
+
+    from pinflex.trajectory.samples import MAX_JOINT_VALUE
+
+    try:
+        value = parse_number(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    if abs(value) > MAX_JOINT_VALUE:
+        raise argparse.ArgumentTypeError(f"{text!r} is beyond {MAX_JOINT_VALUE:g}: joint values "
+                                         "are in radians or metres")
+    return value
 
 
 def add_model_arguments(p: argparse.ArgumentParser, *, default_joints: str | None = "annotated",
@@ -55,10 +73,25 @@ def inertia_text(model) -> str:
     return ("link inertia: " + "; ".join(notes)) if notes else ""
 
 
+def add_allow_paths(p: argparse.ArgumentParser) -> None:
+    """``--allow-paths``: read files a description names from outside its folder."""
+    p.add_argument("--allow-paths", action="store_true",
+                   help="read an overlay's base URDF and mesh files from anywhere (default: "
+                   "only from the description's folder and the package roots)")
+
+
+def robot_description(args: argparse.Namespace):
+    """The description of ``args.urdf``, with ``--allow-paths`` if the command has it."""
+    from pinflex.description import load
+
+    return load(args.urdf, allow_paths=bool(getattr(args, "allow_paths", False)))
+
+
 def add_robot_arguments(p: argparse.ArgumentParser) -> None:
     """The robot file, pose, parameters, joints and planar switch of ``modes`` and ``view``."""
     p.add_argument("urdf", help="annotated URDF (or pinflex overlay) file")
-    p.add_argument("--q", type=float, nargs="+", metavar="V",
+    add_allow_paths(p)
+    p.add_argument("--q", type=joint_value, nargs="+", metavar="V",
                    help="joint values, one per moving joint, in the file's convention "
                    "(default: zeros)")
     add_model_arguments(p)

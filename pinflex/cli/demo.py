@@ -9,7 +9,6 @@ object). A new section is a function and one entry in the list. The numbers come
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from collections.abc import Callable
@@ -185,5 +184,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     if args.json:
         out = summary(demo.results["assignment"], total)
         out.update({"paper": PAPER, "out": str(out_dir), **demo.report})
-        print(json.dumps(out))
+        from pinflex.outputs import json_text
+
+        print(json_text(out))
     return 0

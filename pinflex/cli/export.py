@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, parse_values
+from pinflex.cli.common import add_robot_arguments, parse_values, robot_description
 
 
 def add_parser(sub) -> None:
@@ -51,14 +51,14 @@ def cmd_export(args: argparse.Namespace) -> int:
     from pinflex.erls import FlexibleModel
     from pinflex.native.export import linear_model, save_linear_model
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
-                          joints=args.joints)
+    model = FlexibleModel(robot_description(args), planar=args.planar,
+                          values=parse_values(args.set), joints=args.joints)
     times = None
     if args.trajectory:
         from pinflex.erls.along import trajectory_for
         from pinflex.trajectory import Trajectory
 
-        traj = Trajectory.from_csv(args.trajectory)
+        traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
         q = trajectory_for(model, traj)
         times = traj.times_s
     else:

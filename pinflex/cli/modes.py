@@ -6,7 +6,13 @@ import argparse
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, inertia_text, joints_text, parse_values
+from pinflex.cli.common import (
+    add_robot_arguments,
+    inertia_text,
+    joints_text,
+    parse_values,
+    robot_description,
+)
 
 
 def add_parser(sub) -> None:
@@ -25,25 +31,30 @@ def add_parser(sub) -> None:
     p.add_argument("--png", metavar="OUT", nargs="?", const="",
                    help="with --trajectory: write a chart (default name: the trajectory's "
                    "with _modes.png)")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar on stderr (shown by default when stderr is a terminal;"
+                   " with --trajectory)")
     p.set_defaults(func=cmd_modes)
 
 
 def cmd_modes(args: argparse.Namespace) -> int:
     """Run ``pinflex modes``."""
     from pinflex.erls import FlexibleModel
+    from pinflex.exceptions import ConfigurationError
 
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
-                          joints=args.joints)
+    if args.tol is not None and not 0.0 < args.tol < 1.0:
+        raise ConfigurationError(f"--tol {args.tol:g}: give a relative tolerance in (0, 1)")
+    model = FlexibleModel(robot_description(args), planar=args.planar,
+                          values=parse_values(args.set), joints=args.joints)
+    if args.modes is not None and args.modes > model.n_elastic:
+        raise ConfigurationError(f"--modes {args.modes}: the model has elastic modes "
+                                 f"1..{model.n_elastic}")
     if args.trajectory is not None:
         if args.tol is not None:
-            from pinflex.exceptions import ConfigurationError
-
             raise ConfigurationError("--tol picks the elements at one pose (--q); it does not "
                                      "go with --trajectory")
         return _along(model, args)
     if args.csv or args.png is not None:
-        from pinflex.exceptions import ConfigurationError
-
         raise ConfigurationError("--csv and --png go with --trajectory")
     q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
     fidelity = None
@@ -83,9 +94,9 @@ def cmd_modes(args: argparse.Namespace) -> int:
                                "estimated_error": fidelity.estimate.tolist(),
                                "observed_order": fidelity.order.tolist(),
                                "estimate": "Richardson from three uniform refinements"}
-        import json
+        from pinflex.outputs import json_text
 
-        print(json.dumps(out))
+        print(json_text(out))
         return 0
     print(f"{model.description.name}: {model.ndof} dof ({model.nx} elastic + "
           f"{model.ndof - model.nx} joint), {'planar' if model.planar else 'spatial'}, "
@@ -171,11 +182,17 @@ def held_line(held: dict) -> str:
 
 
 def _along(model, args: argparse.Namespace) -> int:
+    import sys
+
     from pinflex.erls.along import modes_along
+    from pinflex.progress import ProgressBar
     from pinflex.trajectory import Trajectory
 
-    traj = Trajectory.from_csv(args.trajectory)
-    res = modes_along(model, traj, modes=args.modes or 3)
+    traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
+    bar = ProgressBar(traj.n_samples, "modes along: samples",
+                      enabled=not args.no_progress and sys.stderr.isatty())
+    res = modes_along(model, traj, modes=args.modes or 3, progress=bar)
+    bar.close()
     if args.csv:
         res.to_csv(args.csv)
     if args.png is not None:

@@ -3,10 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
-from pinflex.cli.common import add_model_arguments, parse_values
+from pinflex.cli.common import (
+    add_allow_paths,
+    add_model_arguments,
+    joint_value,
+    parse_values,
+    robot_description,
+)
+from pinflex.progress import ProgressBar
 
 
 def add_parser(sub) -> None:
@@ -18,12 +26,13 @@ def add_parser(sub) -> None:
         "Writes a CSV (t, joint names) for `pinflex modes FILE --trajectory`.",
     )
     p.add_argument("urdf", help="annotated URDF (or pinflex overlay) file")
+    add_allow_paths(p)
     p.add_argument("--frame", required=True, help="frame (link) that follows the path")
     p.add_argument("--through", type=float, nargs=3, action="append", required=True,
                    metavar=("X", "Y", "Z"), help="a waypoint [m] (repeat, in order)")
     p.add_argument("--relative", action="store_true",
                    help="waypoints are offsets from the frame at --q, which starts the path")
-    p.add_argument("--q", type=float, nargs="+", metavar="V",
+    p.add_argument("--q", type=joint_value, nargs="+", metavar="V",
                    help="start pose (IK initial guess), one value per joint (default zeros)")
     p.add_argument("--samples", type=int, default=50, help="number of samples (default 50)")
     p.add_argument("--duration", type=float, default=1.0, help="duration [s] (default 1)")
@@ -35,6 +44,8 @@ def add_parser(sub) -> None:
                    help="warn instead of failing when a sample leaves the joint limits")
     add_model_arguments(p)
     p.add_argument("--out", required=True, help="CSV file to write")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar on stderr (shown by default when stderr is a terminal)")
     p.set_defaults(func=cmd_path)
 
 
@@ -44,7 +55,8 @@ def cmd_path(args: argparse.Namespace) -> int:
     from pinflex.exceptions import ConfigurationError
     from pinflex.trajectory.cartesian import path_from_spec
 
-    model = FlexibleModel(args.urdf, values=parse_values(args.set), joints=args.joints)
+    model = FlexibleModel(robot_description(args), values=parse_values(args.set),
+                          joints=args.joints)
     orientation: object = args.orientation
     if orientation not in ("free", "keep"):
         try:
@@ -64,7 +76,10 @@ def cmd_path(args: argparse.Namespace) -> int:
         "orientation": orientation,
         "on_limits": "warn" if args.warn_limits else "raise",
     }
-    traj = path_from_spec(model, spec)
+    bar = ProgressBar(args.samples, "path: samples",
+                      enabled=not args.no_progress and sys.stderr.isatty())
+    traj = path_from_spec(model, spec, progress=bar)
+    bar.close()
     traj.to_csv(args.out)
     speed = np.abs(np.diff(traj.q, axis=0) / np.diff(traj.times_s)[:, None]).max(axis=0)
     print(f"{traj.n_samples} samples over {traj.duration_s:.4g} s written to {args.out}")

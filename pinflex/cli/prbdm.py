@@ -100,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
     if args.starts is None and not paper:
         args.starts = 8
     if args.starts is not None:
-        require_count(args.starts, "--starts", minimum=1, error=ConfigurationError)
+        require_count(args.starts, "--starts", minimum=1, maximum=1000,
+                      error=ConfigurationError)
     if args.samples is not None:
         require_count(args.samples, "--samples", minimum=1, error=ConfigurationError)
     if paper and (args.stiffness_law != "segment" or args.poses != "straight"
@@ -117,10 +118,11 @@ def run(args: argparse.Namespace) -> int:
                                             and args.code_force != 0):
         raise ConfigurationError(f"--code-force {args.code_force!r} must be a non-zero force "
                                  "[N]")
-    require_count(args.links, "--links", minimum=1, error=ConfigurationError)
+    require_count(args.links, "--links", minimum=1, maximum=64, error=ConfigurationError)
     if args.modes is not None:
-        require_count(args.modes, "--modes", minimum=1, error=ConfigurationError)
-    require_count(args.sections, "--sections", minimum=0, error=ConfigurationError)
+        require_count(args.modes, "--modes", minimum=1, maximum=64, error=ConfigurationError)
+    require_count(args.sections, "--sections", minimum=0, maximum=1000,
+                  error=ConfigurationError)
     if args.html:
         check_file_target(args.html, "--html")
     if args.export:

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from typing import Any
 
 from pinflex.cli.common import add_model_arguments, parse_values
 from pinflex.exceptions import ConfigurationError
+from pinflex.progress import ProgressBar
 
 
 def add_parser(sub) -> None:
@@ -59,6 +59,8 @@ def add_parser(sub) -> None:
     g.add_argument("--strict", action="store_true", default=None,
                    help="refuse a motion too fast for eq. (1) (validity indicator above its "
                    "threshold) instead of warning")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar on stderr (shown by default when stderr is a terminal)")
     add_model_arguments(p, default_joints=None)
     p.set_defaults(func=cmd_simulate)
 
@@ -89,7 +91,7 @@ def _is_study(path: str) -> bool:
 
 def run_study(path, joints: str | None = None, values: dict[str, float] | None = None,
               tol: float | None = None, *, trajectory: str | None = None,
-              planar: bool = False, simulation: dict | None = None,
+              planar: bool = False, simulation: dict | None = None, progress: bool = False,
               ) -> tuple[list, list, Any, Any]:
     """Simulate a study's designs (after its assignment), or a robot file along a trajectory.
 
@@ -105,6 +107,8 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
         trajectory: Trajectory CSV (required with a robot file; replaces a study's).
         planar: With a robot file: in-plane elastic dofs only.
         simulation: ``[simulation]`` keys overriding the study's (checked with them).
+        progress: Show a progress bar on stderr over the stages (the assignment, then each
+            simulation).
 
     Returns:
         ``(reports, [(simulation, dynamics)], settings, assignment result or None)``: the
@@ -142,9 +146,12 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
     model = cfg.build_model()
     traj = cfg.build_trajectory(model)
     check_drive(model, traj, settings)
+    stages = ["assignment", "baseline", "assigned"] if cfg.targets else ["design"]
+    bar = ProgressBar(len(stages), "simulate: " + ", ".join(stages), progress)
     result = None
     if cfg.targets:
         model, traj, result = run_config(cfg, model=model, trajectory=traj)
+        bar.update()
         designs = [("baseline", result.y_before), ("assigned", result.y)]
     else:
         designs = [("design", None)]
@@ -153,15 +160,23 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
         rep, sim, dyn = simulate_design(model, traj, y, settings, name)
         reports.append(rep)
         sims.append((sim, dyn))
+        bar.update()
+    bar.close()
     return reports, sims, settings, result
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Run ``pinflex simulate``."""
+    if not 0.0 <= args.exaggeration <= 1e6:
+        from pinflex.exceptions import ConfigurationError
+
+        raise ConfigurationError(f"--exaggeration {args.exaggeration:g}: give a factor from 0 "
+                                 "(no playback) to 1e6")
     t0 = time.perf_counter()
     reports, sims, settings, result = run_study(
         args.config, args.joints, parse_values(args.set) if args.set else None, args.tol,
-        trajectory=args.trajectory, planar=args.planar, simulation=simulation_overrides(args))
+        trajectory=args.trajectory, planar=args.planar, simulation=simulation_overrides(args),
+        progress=not args.no_progress and sys.stderr.isatty())
     total = time.perf_counter() - t0
     files: list[str] = []
     if args.out:
@@ -209,7 +224,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     out_json = {"drive": settings.drive, "designs": designs, "files": files,
                 "total_time_s": total}
     if args.json:
-        print(json.dumps(out_json))
+        from pinflex.outputs import json_text
+
+        print(json_text(out_json))
         return 0
     w = sys.stdout.write
     w(f"drive: {settings.drive}; output frame '{reports[0].frame}'; residual vibration with "

@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from pinflex.cli.common import add_robot_arguments, parse_values
+from pinflex.cli.common import add_robot_arguments, parse_values, robot_description
 
 
 def add_parser(sub) -> None:
@@ -39,6 +39,10 @@ def add_parser(sub) -> None:
                    help="write a static HTML preview instead of serving meshcat")
     p.add_argument("--serve-seconds", type=float, default=None, metavar="S",
                    help="stop serving after S seconds (default: until Ctrl-C)")
+    p.add_argument("--bind", default="127.0.0.1", metavar="ADDRESS",
+                   help="address the served viewer listens on (default 127.0.0.1: this machine "
+                   "only); 0.0.0.0 serves every network interface, without authentication: "
+                   "anyone who can reach the machine sees the scene")
     p.set_defaults(func=cmd_view)
 
 
@@ -52,25 +56,30 @@ def cmd_view(args: argparse.Namespace) -> int:
 
     if args.html:
         check_file_target(args.html, "--html")
-    for name, value in (("--amplitude", args.amplitude), ("--serve-seconds", args.serve_seconds)):
-        if value is not None and not (np.isfinite(value) and value > 0.0):
-            raise ConfigurationError(f"{name} {value} must be a positive finite number")
-    model = FlexibleModel(args.urdf, planar=args.planar, values=parse_values(args.set),
-                          joints=args.joints)
+    for name, value, top in (("--amplitude", args.amplitude, 1e3),
+                             ("--serve-seconds", args.serve_seconds, 1e7)):
+        if value is not None and not (np.isfinite(value) and 0.0 < value <= top):
+            raise ConfigurationError(f"{name} {value} must be a positive number up to {top:g}"
+                                     + (" [m]" if name == "--amplitude" else " [s]"))
+    model = FlexibleModel(robot_description(args), planar=args.planar,
+                          values=parse_values(args.set), joints=args.joints)
     q = np.zeros(model.nv) if args.q is None else np.array(args.q, dtype=float)
+    if not 1 <= args.modes <= model.n_elastic:
+        raise ConfigurationError(f"--modes {args.modes}: give 1 to {model.n_elastic} (the "
+                                 "model's elastic modes)")
     if not 1 <= args.mode <= model.n_elastic:
         from pinflex.exceptions import ConfigurationError
 
         raise ConfigurationError(
             f"mode {args.mode} does not exist: the model has elastic modes 1..{model.n_elastic}"
         )
-    vis = None if args.html else served_visualizer()
+    vis = None if args.html else served_visualizer(bind=args.bind)
     progress = not args.no_progress and sys.stderr.isatty()
     if args.trajectory:
         from pinflex.erls.along import trajectory_for
         from pinflex.trajectory import Trajectory
 
-        traj = Trajectory.from_csv(args.trajectory)
+        traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
         from pinflex.visualization.modes_page import add_grid
         from pinflex.visualization.robot import pose_state, scene_points
 
@@ -97,8 +106,10 @@ def cmd_view(args: argparse.Namespace) -> int:
     if args.html:
         print(f"wrote {write(args.html)}")
         return 0
-    vis = vis or served_visualizer()
-    print(f"meshcat is serving the preview at {vis.url()}")
+    vis = vis or served_visualizer(bind=args.bind)
+    print(f"meshcat is serving the preview at {vis.url()}"
+          + ("" if args.bind == "127.0.0.1" else
+             f" (listening on {args.bind}: other machines can see it)"))
     try:
         if args.serve_seconds is None:
             print("press Ctrl-C to stop")

@@ -16,16 +16,14 @@ negative principal moments are refused everywhere.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from typing import Any
 
-import numpy as np
-
+from pinflex.description.params import Parameter, read_parameters, reference
 from pinflex.description.schema import (
-    _IDENT,
-    _NAME,
     _NS,
-    _REFERENCE,
     MAX_COORDINATE,
     SCHEMA,
+    URDF_NUMBERS,
     URDF_TOP_LEVEL,
     Attr,
     Checked,
@@ -42,7 +40,8 @@ from pinflex.exceptions import (
     UnknownElement,
     UnsupportedJoint,
 )
-from pinflex.validation import Problem, closest, parse_int, parse_number, raise_problems, suggestion
+from pinflex.fields import check_range, parse_text, split_vector
+from pinflex.validation import Problem, closest, parse_number, raise_problems, suggestion
 
 
 def _local(tag: str) -> tuple[str, str]:
@@ -59,7 +58,8 @@ def _near_namespace(uri: str) -> bool:
 
 
 class _Checker:
-    def __init__(self, doc: XmlDocument, plausibility: str, values=None):
+    def __init__(self, doc: XmlDocument, plausibility: str,
+                 values: dict[str, float] | None = None):
         if plausibility not in ("refuse", "warn"):
             raise InvalidDescription(
                 f"plausibility='{plausibility}': expected 'refuse' or 'warn'"
@@ -68,7 +68,7 @@ class _Checker:
         self.lenient = plausibility == "warn"
         self.problems: list[Problem] = []
         self.checked = Checked()
-        self.param_values = _parameter_values(doc, values)
+        self.params: dict[str, Parameter] = read_parameters(doc.root, _NS, values)
 
     # -- reporting
     def where(self, el, attr: str | None = None, name: str | None = None) -> str:
@@ -105,7 +105,29 @@ class _Checker:
         elif root.tag == "robot":
             self.children(root, "robot")
         self.stray(root, inside_pinflex=False, top=True)
+        self.names(root)
         return self.checked
+
+    def names(self, root) -> None:
+        """Parameters named like point masses; design parameters that nothing uses."""
+        masses = {el.get("name"): el for el in root.findall(_NS + "point_mass")}
+        used = {name for _, _, name in self.checked.references}
+        for el in root.findall(_NS + "parameter"):
+            name = el.get("name", "")
+            if name in masses and reference(masses[name].get("mass")) != name:
+                self.add(el, "name", f"parameter '{name}' has the name of a point mass whose "
+                         f"mass is not '{{{name}}}'; values={{...}} and --set would set the "
+                         "parameter only: rename one, or give the mass as "
+                         f"mass=\"{{{name}}}\"")
+            elif name and name not in used and name in self.params:
+                if self.params[name].design:
+                    self.add(el, "name", f"design parameter '{name}' is referenced by no "
+                             "attribute, so it cannot change the model (an assignment would "
+                             f"have a design variable without effect); use it as '{{{name}}}' "
+                             "or drop it")
+                else:
+                    self.add(el, "name", f"parameter '{name}' is referenced by no attribute",
+                             warning=True)
 
     def children(self, parent: ET.Element, ctx: str, owner: str = "") -> None:
         counts: dict[str, int] = {}
@@ -192,41 +214,17 @@ class _Checker:
                          + suggestion(klocal, spec.attrs), UnknownAttribute)
                 continue
             attr = spec.attrs[klocal]
-            numeric = attr.reference and attr.kind in ("float", "int", "vec3")
-            ref = _REFERENCE.match(text.strip()) if numeric else None
-            if ref is not None:
-                self.checked.references.append((local, klocal, ref.group(1)))
-                value = self.param_values.get(ref.group(1))
-                if value is not None and attr.kind in ("float", "int"):
-                    # a referenced value passes the same checks as the literal would
-                    shown = f"{{{ref.group(1)}}} = {value!r}"
-                    if self.ranges(el, klocal, attr, shown, value):
-                        values[klocal] = value
-                continue
-            if numeric and attr.kind == "vec3" and "{" in text:
-                parts = text.split()
-                for part in parts:
-                    m = _REFERENCE.match(part)
-                    if m is not None:
-                        self.checked.references.append((local, klocal, m.group(1)))
-                    else:
-                        try:
-                            parse_number(part)
-                        except ValueError as exc:
-                            self.add(el, klocal, f"{klocal}={text!r}: {exc}")
-                if len(parts) != 3:
-                    self.add(el, klocal, f"{klocal}={text!r}: expected three numbers")
-                continue
-            try:
-                values[klocal] = self.value(attr, text)
-            except ValueError as exc:
-                self.add(el, klocal, f"{klocal}={text!r}: {exc}")
-                continue
-            if not self.ranges(el, klocal, attr, text, values[klocal]):
-                del values[klocal]  # rules see only values inside their hard bounds
+            value = self.attribute(el, local, klocal, attr, text, context.upper)
+            if value is not None:
+                values[klocal] = value
         for key, attr in spec.attrs.items():
             if attr.required and key not in el.attrib:
                 self.add(el, key, f"attribute '{key}' is missing")
+        text = "".join([el.text or "", *(child.tail or "" for child in el)]).strip()
+        if text:  # a value written as text (or CDATA) would be ignored
+            self.add(el, None, f"<pinflex:{local}> holds the text {text[:40]!r}, which pinflex "
+                     "ignores; annotations take their values as attributes only",
+                     UnknownElement)
         if spec.declares and isinstance(values.get(spec.declares), str):
             self.checked.declared.add(values[spec.declares])
 
@@ -236,75 +234,101 @@ class _Checker:
         for rule in spec.rules:
             rule(values, report, context)
 
-    @staticmethod
-    def value(attr: Attr, text: str):
-        kind = attr.kind
-        if kind == "float":
-            return parse_number(text)
-        if kind == "int":
-            return parse_int(text)
-        if kind == "vec3":
-            parts = text.split()
-            if len(parts) != 3:
-                raise ValueError(f"expected three numbers, got {len(parts)}")
-            vec = np.array([parse_number(p) for p in parts])
-            if np.max(np.abs(vec)) > MAX_COORDINATE:
-                raise ValueError(f"coordinates beyond {MAX_COORDINATE:g} m are not a robot")
-            return vec
-        if kind == "bool":
-            t = text.strip().lower()
-            if t in ("true", "1"):
-                return True
-            if t in ("false", "0"):
-                return False
-            raise ValueError("expected true or false")
-        if kind == "choice":
-            if text not in attr.choices:
-                raise ValueError("expected " + " or ".join(f"'{c}'" for c in attr.choices)
-                                 + "; " + suggestion(text, attr.choices))
-            return text
-        if kind == "ident":
-            if not _IDENT.match(text):
-                raise ValueError("expected a name of letters, digits and '_' starting with a "
-                                 "letter")
-            return text
-        if kind == "name":
-            if not _NAME.match(text):
-                raise ValueError("expected a name of letters, digits, '_', '.', '-' "
-                                 "starting with a letter")
-            return text
-        if not text.strip():
-            raise ValueError("must not be empty")
-        return text
+    def attribute(self, el, local: str, key: str, attr: Attr, text: str, upper: dict):
+        """The checked value of one attribute (references resolved), or None if refused.
 
-    def ranges(self, el, key: str, attr: Attr, text: str, value) -> bool:
-        """Check the bounds of a number; False when a hard bound is broken."""
+        A ``{name}`` reference is checked with the value of the parameter it names (its
+        ``--set``/``values=`` override if any) exactly as a literal would be, and a design
+        parameter's bounds too, since an assignment may move it anywhere between them.
+        """
+        problems: list[tuple[str, str]] = []
+
+        def report(_where, message, level):
+            problems.append((message, level))
+
+        numeric = attr.reference and attr.numeric
+        if numeric and "{" in text:
+            value = self.resolved(el, local, key, attr, text, report, upper)
+        else:
+            try:
+                value = parse_text(attr, text)
+            except ValueError as exc:
+                report("", f"{key}={text!r}: {exc}", "error")
+                value = None
+            if value is not None and not self.in_range(attr, key, text, value, report):
+                value = None  # rules see only values inside their hard bounds
+        for message, level in problems:
+            self.add(el, key, message, physical=level == "physical",
+                     warning=level == "warning")
+        return value
+
+    def in_range(self, attr: Attr, key: str, label: str, value, report) -> bool:
+        if attr.kind == "vec3":
+            if max(abs(v) for v in value) > MAX_COORDINATE:
+                report("", f"{key}={label!r}: coordinates beyond {MAX_COORDINATE:g} m are not "
+                       "a robot", "error")
+                return False
+            return True
         if attr.kind not in ("float", "int"):
             return True
-        unit = f" [{attr.unit}]" if attr.unit else ""
-        bad = None
-        if attr.gt is not None and not value > attr.gt:
-            bad = "a positive number" if attr.gt == 0 else f"above {attr.gt:g}"
-        elif attr.ge is not None and not value >= attr.ge:
-            bad = "a number >= 0" if attr.ge == 0 else f">= {attr.ge:g}"
-        elif attr.lt is not None and not value < attr.lt:
-            bad = f"below {attr.lt:g}"
-        elif attr.le is not None and not value <= attr.le:
-            bad = f"at most {attr.le:g}"
-        if bad is not None:
-            self.add(el, key, f"{key}={text} must be {bad}{unit}")
-            return False
-        why = f"; {attr.why}" if attr.why else ""
-        if attr.physical is not None and not attr.physical[0] <= value <= attr.physical[1]:
-            self.add(el, key, f"{key}={text}{unit} is outside [{attr.physical[0]:g}, "
-                     f"{attr.physical[1]:g}], not physical for a robot link{why}",
-                     physical=True)
-        elif attr.plausible is not None and not (
-            attr.plausible[0] <= value <= attr.plausible[1]
-        ):
-            self.add(el, key, f"{key}={text}{unit} is unusual for a robot link (outside "
-                     f"[{attr.plausible[0]:g}, {attr.plausible[1]:g}]){why}", warning=True)
-        return True
+        return check_range(attr, value, f"{key}={label}", "", report,
+                           subject=" for a robot link")
+
+    def resolved(self, el, local: str, key: str, attr: Attr, text: str, report, upper: dict):
+        """A numeric attribute holding ``{name}`` references, checked with their values."""
+        words = split_vector(text) if attr.kind == "vec3" else [text]
+        if attr.kind == "vec3" and len(words) != 3:
+            report("", f"{key}={text!r}: expected three numbers", "error")
+            return None
+        cases: list[list[float]] = [[]]  # the nominal value, then design-bound corners
+        names = []
+        for word in words:
+            name = reference(word)
+            if name is None:
+                try:
+                    number = parse_number(word)
+                except ValueError as exc:
+                    report("", f"{key}={text!r}: {exc}", "error")
+                    return None
+                for case in cases:
+                    case.append(number)
+                continue
+            names.append(name)
+            self.checked.references.append((local, key, name))
+            param = self.params.get(name)
+            if param is None:
+                return None  # undeclared: named when the description is built
+            extra = []
+            if param.design and attr.kind != "vec3":
+                extra = [[*cases[0], param.lower], [*cases[0], param.upper]]
+            for case in cases:
+                case.append(param.value)
+            cases += extra
+        if not names:
+            return None
+        labels = ["", " at its design lower bound", " at its design upper bound"]
+        value = None
+        for i, case in enumerate(cases):
+            v: Any
+            if attr.kind == "vec3":
+                v = tuple(case)
+                shown = " ".join(f"{c:g}" for c in case)
+            else:
+                v = case[0]
+                shown = f"{v:g}"
+            label = f'"{text.strip()}" = {shown}{labels[i] if i < len(labels) else ""}'
+            if attr.kind == "int":
+                if not float(case[0]).is_integer():
+                    report("", f"{key}={label} is not a whole number", "error")
+                    return None
+                v = int(case[0])
+            if not self.in_range(attr, key, label, v, report):
+                return None
+            if i == 0:
+                value = v
+            elif i == 2:
+                upper[key] = v
+        return value
 
 
 def _tagname(el) -> str:
@@ -320,35 +344,17 @@ def _ctxname(ctx: str) -> str:
     return f"pinflex:{ctx}"
 
 
-def _parameter_values(doc: XmlDocument, values) -> dict[str, float]:
-    """``{name: value}`` of the document's parameters (overridden by ``values``), for the
-    checks of the attributes that reference them; unreadable values are left to the
-    parameter's own checks."""
-    out: dict[str, float] = {}
-    for el in doc.root.iter(_NS + "parameter"):
-        name, text = el.get("name"), el.get("value")
-        if name is None or text is None:
-            continue
-        try:
-            out[name] = parse_number(text)
-        except ValueError:
-            continue
-    for name, value in (values or {}).items():
-        if name in out:
-            out[name] = float(value)
-    return out
-
-
 def check_annotations(doc: XmlDocument, *, plausibility: str = "refuse",
-                      raise_now: bool = True, values=None) -> tuple[Checked, list[Problem]]:
+                      raise_now: bool = True, values: dict[str, float] | None = None
+                      ) -> tuple[Checked, list[Problem]]:
     """Check every pinflex element and attribute of a document against :data:`SCHEMA`.
 
     Args:
         doc: The parsed document (an annotated URDF or an overlay file).
         plausibility: 'refuse' non-physical values (default) or only 'warn' about them.
         raise_now: Raise one error listing every problem (default), else return them.
-        values: Parameter values overriding the file's (``values=`` / ``--set``): an
-            attribute that references a parameter is checked with its value, as a literal.
+        values: Parameter overrides (``--set``, ``values=``): references are checked with
+            the values they will have.
 
     Returns:
         ``(checked, problems)``: facts for :func:`check_physical`, and the problems.
@@ -374,8 +380,6 @@ def check_urdf(doc: XmlDocument, flexible_links: set[str], *, upstream: bool = F
         upstream: The file is an upstream URDF used through an overlay: a zero mass with a
             non-zero inertia warns instead of being refused.
         raise_now: Raise one error listing every problem (default), else return them.
-        values: Parameter values overriding the file's (``values=`` / ``--set``): an
-            attribute that references a parameter is checked with its value, as a literal.
 
     Returns:
         The problems (empty when ``raise_now`` and nothing was wrong).
@@ -432,65 +436,59 @@ def check_urdf(doc: XmlDocument, flexible_links: set[str], *, upstream: bool = F
                     + (f"; did you mean '{near}'?" if near else ""), InvalidDescription)
             else:
                 ends[end] = link
-        for sub_tag, keys in (("origin", ("xyz", "rpy")), ("axis", ("xyz",))):
-            sub = el.find(sub_tag)
-            for key in keys:
-                if sub is not None and sub.get(key) is not None:
-                    _vec_problem(sub, key, add)
-        limit = el.find("limit")
-        if limit is not None:
-            vals = {}
-            for key in ("lower", "upper", "effort", "velocity"):
-                text = limit.get(key)
-                if text is None:
-                    continue
-                try:
-                    vals[key] = parse_number(text)
-                except ValueError as exc:
-                    add(limit, f"{label} limit {key}: {exc}", attr=key)
+        numbers = _urdf_numbers(el, ("joint",), label, add)
+        mimic = el.find("mimic")
+        if mimic is not None:
+            add(mimic, f"{label} mimics joint '{mimic.get('joint')}'; pinflex treats every "
+                "joint as an independent coordinate, so the coupling is ignored"
+                + (" (upstream URDF: the joint moves on its own in pinflex)" if upstream else
+                   ": drop <mimic> or model the coupling outside the URDF"),
+                UnsupportedJoint, warning=upstream)
+        vals = numbers.get(("joint", "limit"), {})
+        if el.find("limit") is not None:
+            limit = el.find("limit")
             if jtype in ("revolute", "prismatic") and "lower" in vals and "upper" in vals:
                 if vals["lower"] > vals["upper"]:
                     add(limit, f"{label}: lower limit {vals['lower']:g} is above upper limit "
                         f"{vals['upper']:g}", attr="lower")
         if "child" in ends and "parent" in ends:
             parent_of[ends["child"]] = (ends["parent"], jtype in MOVING_JOINTS)
+    roots = [name for name in links if name not in parent_of]
+    if len(roots) == 1:
+        children: dict[str, list[str]] = {}
+        for child, (parent, _) in parent_of.items():
+            children.setdefault(parent, []).append(child)
+        reached, todo = {roots[0]}, [roots[0]]
+        while todo:
+            for child in children.get(todo.pop(), ()):
+                if child not in reached:
+                    reached.add(child)
+                    todo.append(child)
+        cut = [name for name in links if name not in reached]
+        if cut:
+            add(root, f"links {', '.join(cut[:5])}{' ...' if len(cut) > 5 else ''} are not "
+                f"connected to the root link '{roots[0]}': their joints form a loop")
+    numbers_of = {name: _urdf_numbers(el, ("link",), f"link '{name}'", add)
+                  for name, el in links.items()}
     for name, el in links.items():
         inertial = el.find("inertial")
         if inertial is None:
             continue
         used = name not in flexible_links and _moved(name, parent_of)
         mass_el = inertial.find("mass")
-        mass = None
-        if mass_el is None or mass_el.get("value") is None:
-            if used:
-                add(inertial, f"link '{name}': <inertial> without <mass value=\"...\"/>",
-                    warning=upstream)
-        else:
-            try:
-                mass = parse_number(mass_el.get("value", ""))
-            except ValueError as exc:
-                add(mass_el, f"link '{name}' mass: {exc}", attr="value")
+        if (mass_el is None or mass_el.get("value") is None) and used:
+            add(inertial, f"link '{name}': <inertial> without <mass value=\"...\"/>",
+                warning=upstream)
+        mass = numbers_of[name].get(("link", "inertial", "mass"), {}).get("value")
         inertia_el = inertial.find("inertia")
-        moments: dict[str, float] = {}
-        if inertia_el is not None:
-            for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
-                text = inertia_el.get(key)
-                if text is None:
-                    continue
-                try:
-                    moments[key] = parse_number(text)
-                except ValueError as exc:
-                    add(inertia_el, f"link '{name}' inertia {key}: {exc}", attr=key)
-        origin = inertial.find("origin")
-        if origin is not None:
-            for key in ("xyz", "rpy"):
-                if origin.get(key) is not None:
-                    _vec_problem(origin, key, add)
+        moments = numbers_of[name].get(("link", "inertial", "inertia"), {})
         if mass is not None and mass < 0.0:
             add(mass_el, f"link '{name}' has mass {mass:g} kg; a mass cannot be negative",
                 attr="value")
         elif any(moments.get(k, 0.0) < 0.0 for k in ("ixx", "iyy", "izz")):
             add(inertia_el, f"link '{name}' has a negative principal moment of inertia")
+        elif used and moments:
+            _check_inertia(name, inertia_el, moments, upstream, add)
         if mass is None or not used:
             continue
         if mass == 0.0 and any(moments.values()):
@@ -507,6 +505,33 @@ def check_urdf(doc: XmlDocument, flexible_links: set[str], *, upstream: bool = F
     return problems
 
 
+def _check_inertia(name: str, el, moments: dict, upstream: bool, add) -> None:
+    """A rigid body's inertia is positive semi-definite and its principal moments satisfy
+    the triangle inequality (``I1 <= I2 + I3``).
+
+    A tensor that is not positive semi-definite makes the mass matrix indefinite (every
+    eigenfrequency of the arm is then meaningless): refused, warned in an upstream URDF.
+    One that only breaks the triangle inequality belongs to no rigid body (common in upstream
+    files, harmless to the mass matrix): warned.
+    """
+    import numpy as np
+
+    g = {k: moments.get(k, 0.0) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    tensor = np.array([[g["ixx"], g["ixy"], g["ixz"]], [g["ixy"], g["iyy"], g["iyz"]],
+                       [g["ixz"], g["iyz"], g["izz"]]])
+    w = np.linalg.eigvalsh(tensor)
+    scale = float(np.abs(w).max())
+    principal = ", ".join(f"{v:.4g}" for v in w)
+    if w[0] < -1e-9 * scale:
+        add(el, f"link '{name}': its inertia is not positive semi-definite (principal moments "
+            f"{principal} kg m^2): the mass matrix would be indefinite; correct ixy, ixz, iyz "
+            "or the diagonal", warning=upstream)
+    elif w[2] > w[0] + w[1] + 1e-6 * scale:
+        add(el, f"link '{name}': its principal moments of inertia ({principal} kg m^2) break "
+            "the triangle inequality I3 <= I1 + I2 that every rigid body satisfies; check the "
+            "inertia", warning=True)
+
+
 def _moved(link: str, parent_of: dict[str, tuple[str, bool]]) -> bool:
     seen = set()
     while link in parent_of and link not in seen:
@@ -517,16 +542,52 @@ def _moved(link: str, parent_of: dict[str, tuple[str, bool]]) -> bool:
     return False
 
 
-def _vec_problem(el, key: str, add) -> None:
-    text = el.get(key)
-    parts = text.split()
-    try:
-        if len(parts) != 3:
-            raise ValueError(f"expected three numbers, got '{text}'")
-        for p in parts:
-            parse_number(p)
-    except ValueError as exc:
-        add(el, f"{key}: {exc}", attr=key)
+def _urdf_numbers(el: ET.Element, path: tuple[str, ...], label: str, add) -> dict:
+    """Check every numeric attribute below ``el`` listed in :data:`URDF_NUMBERS`.
+
+    Returns:
+        ``{path: {attribute: value}}`` of the values that passed.
+    """
+    out: dict[tuple[str, ...], dict] = {}
+    for child in el:
+        if not isinstance(child.tag, str) or child.tag.startswith("{"):
+            continue
+        sub = (*path, child.tag)
+        fields = URDF_NUMBERS.get(sub)
+        if fields is not None:
+            got = out.setdefault(sub, {})
+            for key, f in fields.items():
+                text = child.get(key)
+                if text is None:
+                    continue
+
+                def report(_where, message, level, _child=child, _key=key):
+                    add(_child, f"{label} {' '.join(sub[1:])} {_key}: {message}", attr=_key,
+                        warning=level == "warning")
+
+                try:
+                    value = parse_text(f, text)
+                except ValueError as exc:
+                    report("", str(exc), "error")
+                    continue
+                if f.kind != "vec3" and text != text.strip(" \t\r\n"):
+                    report("", f"{text!r} has spaces around the number, which Pinocchio's "
+                           "URDF reader refuses (it would skip the element)", "error")
+                    continue
+                if f.kind == "vec3":
+                    big = max(abs(v) for v in value)
+                    limit = f.le if f.le is not None else MAX_COORDINATE
+                    if big > limit:
+                        report("", f"{text!r}: a component beyond {limit:g}"
+                               f"{' ' + f.unit if f.unit else ''} is not a robot", "error")
+                        continue
+                elif not check_range(f, value, text, "", report):
+                    continue
+                got[key] = value
+        if len(sub) < 4:
+            for deeper, values in _urdf_numbers(child, sub, label, add).items():
+                out.setdefault(deeper, {}).update(values)
+    return out
 
 
 # --------------------------------------------------------------------- after parsing
@@ -548,6 +609,11 @@ def check_physical(desc, checked: Checked, source: str, *,
         where = f"<pinflex:flexible link='{name}'>"
         length = f.length_m
         extent = checked.extents.get(name)
+        extent_hi = checked.extents_upper.get(name)
+        if extent_hi is not None and extent_hi > length and not (extent and extent > length):
+            add(where, f"at the upper bound of its design parameter the section is "
+                f"{extent_hi:g} m across but the link is {length:g} m long; lower the "
+                "parameter's upper bound", True)
         if extent is not None and extent > length:
             add(where, f"the section is {extent:g} m across but the link is {length:g} m long; "
                 "dimensions are in metres and a beam must be longer than it is wide", True)
@@ -563,5 +629,17 @@ def check_physical(desc, checked: Checked, source: str, *,
                 "and the area), not physical for a robot link", True)
         elif not 100.0 <= rho <= 23000.0:
             add(where, f"the material density is {rho:.4g} kg/m^3, unusual for a robot link",
+                False)
+    for p in desc.point_masses:
+        f = desc.flexible.get(p.link)
+        if f is None:
+            continue
+        length = f.length_m
+        s = float(p.xyz @ f.tip) / length  # axial station along the beam
+        if s < -0.01 * length or s > 1.01 * length:
+            add(f"<pinflex:point_mass name='{p.name}'>", f"the mass sits {s:.4g} m along the "
+                f"beam of link '{p.link}', which is {length:g} m long: it rides on the beam's "
+                f"{'root' if s < 0 else 'tip'} through a rigid lever of "
+                f"{abs(s if s < 0 else s - length):.3g} m; check xyz (link frame, metres)",
                 False)
     raise_problems(source, problems, " in the pinflex annotations")

@@ -34,13 +34,18 @@ def robot_data_dir() -> Path:
     )
 
 
-def resolve_base(base: str, folder: Path) -> Path:
+def resolve_base(base: str, folder: Path, *, allow_paths: bool = False) -> Path:
     """Path of an overlay's base URDF: ``example-robot-data:<path in robots/>`` or a file.
+
+    The file must lie inside the overlay's folder (relative paths, no ``..`` out of it, no
+    absolute path elsewhere), or inside example-robot-data's ``robots/`` folder for the
+    prefixed form, unless ``allow_paths``.
 
     Args:
         base: The overlay's ``base`` attribute: ``example-robot-data:<path>`` or a file path,
             relative paths taken from ``folder``.
         folder: Folder of the overlay file.
+        allow_paths: Accept a base anywhere.
 
     Returns:
         The resolved path of an existing file.
@@ -48,14 +53,26 @@ def resolve_base(base: str, folder: Path) -> Path:
     Raises:
         InvalidDescription: ``base`` is empty, the file does not exist, or
             example-robot-data is needed and not installed.
+        UnsafePath: The base lies outside those folders.
     """
+    from pinflex.description.source import confine
+
     if not base:
         raise InvalidDescription("<pinflex:overlay> needs a base=\"...\" URDF")
     if base.startswith(ROBOT_DATA_PREFIX):
-        path = robot_data_dir() / base[len(ROBOT_DATA_PREFIX):]
+        root = robot_data_dir()
+        path = confine(root / base[len(ROBOT_DATA_PREFIX):], [root], "the overlay's base URDF",
+                       allow=allow_paths)
     else:
-        path = (folder / base).resolve()
-    if not path.is_file():
+        if base.startswith("file://"):
+            base = base[len("file://"):]
+        path = confine(folder / base, [folder], "the overlay's base URDF", allow=allow_paths)
+    try:
+        found = path.is_file()
+    except OSError as exc:
+        raise InvalidDescription(f"the overlay's base URDF cannot be read: {exc.strerror}"
+                                 ) from None
+    if not found:
         raise InvalidDescription(f"the overlay's base URDF '{base}' was not found at '{path}'")
     return path
 

@@ -21,6 +21,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from pinflex.validation import ASCII_SPACE, parse_number
 from pinflex.exceptions import (
     DesignVariableOutOfBounds,
     InvalidBeamProperty,
@@ -28,8 +29,8 @@ from pinflex.exceptions import (
     ParameterNotFound,
 )
 
-_REF = re.compile(r"^\{\s*([A-Za-z_][A-Za-z0-9_]*)\s*\}$")
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_REF = re.compile(r"\{[ \t]*([A-Za-z_][A-Za-z0-9_]*)[ \t]*\}", re.ASCII)
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*", re.ASCII)
 _TRUE = ("1", "true", "yes")
 _BOOL = _TRUE + ("0", "false", "no")
 
@@ -63,18 +64,51 @@ def reference(text: str | None) -> str | None:
     """The parameter name of a ``{name}`` reference, else None."""
     if text is None:
         return None
-    m = _REF.match(text.strip())
+    m = _REF.fullmatch(text.strip(ASCII_SPACE))
     return m.group(1) if m else None
 
 
 def _number(text: str, what: str) -> float:
+    """A number of the one grammar; ``-inf``/``inf`` stand for absent bounds only."""
+    if text in ("-inf", "inf"):
+        return float(text)
     try:
-        value = float(text)
+        return parse_number(text)
     except ValueError as exc:
-        raise InvalidDescription(f"{what}: '{text}' is not a number") from exc
-    if math.isnan(value):
-        raise InvalidDescription(f"{what}: NaN is not a value")
-    return value
+        raise InvalidDescription(f"{what}: {exc}") from exc
+
+
+def read_parameters(root_el: ET.Element, ns: str, overrides: dict[str, float] | None
+                    ) -> dict[str, Parameter]:
+    """The well-formed ``<pinflex:parameter>`` elements of a document, overrides applied.
+
+    Lenient: malformed parameters are left out (the schema checks name them), and an
+    override outside its parameter's bounds is not applied (the build refuses it by name).
+    Used by the schema checks to check ``{name}`` references with the values they stand for.
+    """
+    params: dict[str, Parameter] = {}
+    for el in root_el.findall(ns + "parameter"):
+        name = el.get("name", "")
+        if not _NAME.fullmatch(name) or name in params:
+            continue
+        try:
+            value = _number(el.get("value", ""), "")
+            lower = _number(el.get("lower", "-inf"), "")
+            upper = _number(el.get("upper", "inf"), "")
+        except InvalidDescription:
+            continue
+        design = el.get("design", "false").strip().lower() in _TRUE
+        if overrides and name in overrides:
+            new = overrides[name]
+            if isinstance(new, int | float) and not isinstance(new, bool) and \
+                    math.isfinite(new) and lower <= new <= upper:
+                value = float(new)
+        if not (math.isfinite(value) and lower <= upper):
+            continue
+        if design and not (math.isfinite(lower) and math.isfinite(upper)):
+            design = False  # refused by name elsewhere; check the nominal value only
+        params[name] = Parameter(name, value, lower, upper, design)
+    return params
 
 
 def parse_parameters(root_el: ET.Element, ns: str, overrides: dict[str, float] | None
@@ -86,7 +120,7 @@ def parse_parameters(root_el: ET.Element, ns: str, overrides: dict[str, float] |
     params: dict[str, Parameter] = {}
     for el in root_el.findall(ns + "parameter"):
         name = el.get("name", "")
-        if not _NAME.match(name):
+        if not _NAME.fullmatch(name):
             raise InvalidDescription(
                 f"<pinflex:parameter name='{name}'>: a parameter name is an identifier "
                 "(letters, digits and underscores, not starting with a digit)"
@@ -175,9 +209,9 @@ class Resolver:
             )
         else:
             try:
-                value = float(text)
+                value = parse_number(text)
             except ValueError as exc:
-                raise InvalidBeamProperty(f"{what}: {key}='{text}' is not a number") from exc
+                raise InvalidBeamProperty(f"{what}: {key}: {exc}") from exc
         if positive and (not math.isfinite(value) or value <= 0.0):
             raise InvalidBeamProperty(f"{what}: {key}={text} must be a positive finite number"
                                       + (f" (it is {value})" if name else ""))

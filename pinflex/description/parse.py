@@ -12,8 +12,8 @@ from pinflex import beam
 from pinflex.description.checks import check_annotations, check_physical, check_urdf
 from pinflex.description.overlay import apply_overlay, resolve_base
 from pinflex.description.params import Resolver, parse_parameters
-from pinflex.description.schema import Checked, attribute_unit
-from pinflex.description.source import parse_xml, read_text
+from pinflex.description.schema import MAX_ELEMENTS_PER_LINK, Checked, attribute_unit
+from pinflex.description.source import input_path, parse_xml, read_text
 from pinflex.description.types import (
     _NS,
     MOVING_JOINTS,
@@ -31,14 +31,16 @@ from pinflex.exceptions import (
     InvalidDescription,
     JointNotFound,
     LinkNotFound,
+    UnreadableFile,
     UnsupportedJoint,
 )
 from pinflex.sections import SHAPES, PropertyInputs, beam_properties
-from pinflex.validation import raise_problems
+from pinflex.fields import split_vector
+from pinflex.validation import parse_number, raise_problems
 
 
 def load(path: str | Path, values: dict[str, float] | None = None, *,
-         plausibility: str = "refuse") -> RobotDescription:
+         plausibility: str = "refuse", allow_paths: bool = False) -> RobotDescription:
     """Read an annotated URDF file or a pinflex overlay (see :func:`apply_overlay`).
 
     Every annotation is checked against :mod:`pinflex.description.schema` first (file, line,
@@ -49,23 +51,47 @@ def load(path: str | Path, values: dict[str, float] | None = None, *,
         values: Overrides of ``<pinflex:parameter>`` values (checked against their bounds).
         plausibility: 'refuse' values that are non-physical for a robot link (default), or
             only 'warn' about them (impossible values are refused either way).
+        allow_paths: Read an overlay's base URDF and the meshes of the visual geometry
+            from anywhere; by default they must lie in the file's folder (or the base URDF's,
+            for its meshes) or in example-robot-data (:class:`UnsafePath` otherwise).
     """
-    path = Path(path)
+    from pinflex.validation import require_bool
+
+    allow_paths = require_bool(allow_paths, "allow_paths")
+    path = input_path(path, "URDF file", UnreadableFile)
+    values = check_values(values)
     text = read_text(path, "URDF file")
     doc = parse_xml(text, str(path))
     if doc.root.tag == _NS + "overlay":
         checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False,
                                               values=values)
         raise_problems(str(path), problems, " in the overlay")
-        base = resolve_base(doc.root.get("base", ""), path.parent)
+        base = resolve_base(doc.root.get("base", ""), path.parent, allow_paths=allow_paths)
         flexible = frozenset(el.get("link", "") for el in doc.root.findall(_NS + "flexible"))
         base_text, base_problems = _checked_base(base, flexible, plausibility)
         raise_problems(str(base), list(base_problems))
         merged = apply_overlay(base_text, doc.root)
         return _build(ET.fromstring(merged), merged, base.parent, values, str(path), checked,
-                      plausibility)
+                      plausibility, allow_paths)
     return parse(text, base_dir=path.parent, values=values, source=str(path),
-                 plausibility=plausibility)
+                 plausibility=plausibility, allow_paths=allow_paths)
+
+
+def check_values(values) -> dict[str, float] | None:
+    """Parameter and point-mass overrides as ``{name: float}``; anything else refused by name."""
+    if values is None:
+        return None
+    from pinflex.exceptions import ConfigurationError
+    from pinflex.validation import require_number
+
+    if not isinstance(values, dict):
+        raise ConfigurationError(f"values must be a dict {{name: number}}, got {values!r}")
+    out = {}
+    for name, value in values.items():
+        if not isinstance(name, str):
+            raise ConfigurationError(f"values: the name {name!r} is not a string")
+        out[name] = require_number(value, f"values['{name}']")
+    return out
 
 
 def _checked_base(base: Path, flexible: frozenset, plausibility: str):
@@ -87,7 +113,7 @@ def _checked_base_cached(base: str, _mtime: int, _size: int, flexible: frozenset
 
 def parse(urdf_xml: str, base_dir: Path | None = None,
           values: dict[str, float] | None = None, *, source: str = "<string>",
-          plausibility: str = "refuse") -> RobotDescription:
+          plausibility: str = "refuse", allow_paths: bool = False) -> RobotDescription:
     """Parse URDF text with pinflex annotations, checked as :func:`load` does.
 
     Args:
@@ -98,7 +124,10 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
             point masses set by :class:`pinflex.FlexibleModel`).
         source: Name of the text in messages.
         plausibility: 'refuse' (default) or 'warn' about non-physical values.
+        allow_paths: Let the visual geometry read meshes outside ``base_dir`` and the
+            package roots (see :func:`load`).
     """
+    values = check_values(values)
     doc = parse_xml(urdf_xml, source)
     checked, problems = check_annotations(doc, plausibility=plausibility, raise_now=False,
                                           values=values)
@@ -106,12 +135,20 @@ def parse(urdf_xml: str, base_dir: Path | None = None,
         flexible = {el.get("link", "") for el in doc.root.findall(_NS + "flexible")}
         problems += check_urdf(doc, flexible, raise_now=False)
     raise_problems(source, problems)
-    return _build(doc.root, urdf_xml, base_dir, values, source, checked, plausibility)
+    return _build(doc.root, urdf_xml, base_dir, values, source, checked, plausibility,
+                  allow_paths)
+
+
+def _reparse(urdf_xml: str, base_dir: Path | None, source: str, plausibility: str,
+             allow_paths: bool, values: dict) -> RobotDescription:
+    """The description of the same text with other parameter values (its ``reparse``)."""
+    return parse(urdf_xml, base_dir=base_dir, values=values, source=source,
+                 plausibility=plausibility, allow_paths=allow_paths)
 
 
 def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
            values: dict[str, float] | None, source: str, checked: Checked,
-           plausibility: str) -> RobotDescription:
+           plausibility: str, allow_paths: bool = False) -> RobotDescription:
     if root_el.tag != "robot":
         raise InvalidDescription(f"the URDF's root element is <{root_el.tag}>, expected <robot>")
     params = parse_parameters(root_el, _NS, values)
@@ -186,6 +223,9 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
         values={k: float(v) for k, v in (values or {}).items() if k in params},
         bodies=tuple(bodies),
         inertia_notes=tuple(notes),
+        allow_paths=bool(allow_paths),
+        reparse=functools.partial(_reparse, urdf_xml, base_dir, source, plausibility,
+                                  bool(allow_paths)),
     )
     check_physical(desc, checked, source, plausibility=plausibility)
     return desc
@@ -193,9 +233,9 @@ def _build(root_el: ET.Element, urdf_xml: str, base_dir: Path | None,
 
 def _vec(text: str | None, default: str, what: str) -> np.ndarray:
     try:
-        out = np.array([float(t) for t in (text or default).split()])
+        out = np.array([parse_number(t) for t in split_vector(text or default)])
     except ValueError as exc:
-        raise InvalidDescription(f"{what}: '{text}' is not a list of numbers") from exc
+        raise InvalidDescription(f"{what}: {exc}") from exc
     if out.shape != (3,) or not np.all(np.isfinite(out)):
         raise InvalidDescription(f"{what}: expected three finite numbers, got '{text}'")
     return out
@@ -282,9 +322,9 @@ def _parse_body(el: ET.Element, links: tuple[str, ...], R: Resolver) -> RigidBod
 def _parse_inertial(link: str, el: ET.Element) -> RigidInertia:
     xyz, rot = _origin(el.find("origin"), f"link '{link}' inertial")
     mass_el, inertia_el = el.find("mass"), el.find("inertia")
-    mass = float(mass_el.get("value", "0")) if mass_el is not None else 0.0
+    mass = _urdf_number(mass_el, "value", "0", f"link '{link}' mass")
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-    vals = {k: float(inertia_el.get(k, "0")) if inertia_el is not None else 0.0 for k in keys}
+    vals = {k: _urdf_number(inertia_el, k, "0", f"link '{link}' inertia") for k in keys}
     inertia = np.array(
         [
             [vals["ixx"], vals["ixy"], vals["ixz"]],
@@ -293,6 +333,18 @@ def _parse_inertial(link: str, el: ET.Element) -> RigidInertia:
         ]
     )
     return RigidInertia(mass=mass, com=xyz, inertia=rot @ inertia @ rot.T)
+
+
+def _urdf_number(el: ET.Element | None, key: str, default: str | None, what: str,
+                 absent: float = 0.0) -> float:
+    """A number attribute of a plain URDF element, read by pinflex's number grammar."""
+    text = None if el is None else el.get(key, default)
+    if text is None:
+        return absent
+    try:
+        return parse_number(text)
+    except ValueError as exc:
+        raise InvalidDescription(f"{what} {key}: {exc}") from exc
 
 
 def _name(el: ET.Element | None, what: str, key: str = "name") -> str:
@@ -325,8 +377,8 @@ def _parse_joint(el: ET.Element, links: tuple[str, ...]) -> Joint:
     lower, upper = -np.inf, np.inf
     limit = el.find("limit")
     if limit is not None and jtype in ("revolute", "prismatic"):
-        lower = float(limit.get("lower", "-inf"))
-        upper = float(limit.get("upper", "inf"))
+        lower = _urdf_number(limit, "lower", None, f"joint '{name}' limit", -np.inf)
+        upper = _urdf_number(limit, "upper", None, f"joint '{name}' limit", np.inf)
     return Joint(name, str(jtype), parent, child, xyz, rot, axis, lower, upper)
 
 
@@ -385,17 +437,13 @@ def _parse_flexible(el, links, joints, child_joints, parent_joint, R: Resolver) 
     if link not in links:
         raise LinkNotFound(link, links)
     what = f"flexible link '{link}'"
-    elements_text = R.text(el, "elements", what) or ""
-    try:
-        elements = int(float(elements_text))
-        if float(elements_text) != elements:
-            raise ValueError(elements_text)
-    except ValueError as exc:
+    count = R.number(el, "elements", what)  # checked by the schema: a whole number in range
+    elements = int(count) if count is not None else 0
+    if count != elements or not 1 <= elements <= MAX_ELEMENTS_PER_LINK:
         raise InvalidBeamProperty(
-            f"{what}: 'elements' must be a positive integer, got '{el.get('elements')}'"
-        ) from exc
-    if elements < 1:
-        raise InvalidBeamProperty(f"{what}: 'elements' must be >= 1, got {elements}")
+            f"{what}: 'elements' must be a whole number in 1..{MAX_ELEMENTS_PER_LINK}, got "
+            f"'{el.get('elements')}'"
+        )
     if el.get("tip") is not None:
         tip = _vec(R.text(el, "tip", what), "", what + " tip")
     else:
@@ -505,14 +553,16 @@ def _parse_point_mass(el: ET.Element, links: tuple[str, ...], R: Resolver) -> Po
     mass_ref = R.ref(el, "mass")
     if not np.isfinite(mass) or mass < 0.0:
         raise InvalidBeamProperty(f"{what}: mass = {mass} must be a finite number >= 0 [kg]")
-    design = el.get("design", "false").lower() in ("1", "true", "yes")
+    design = el.get("design", "false").strip().lower() in ("1", "true")
     if design and mass_ref is not None:
         raise InvalidDescription(
             f"{what}: its mass references the design parameter '{mass_ref}'; the parameter is "
             "the design variable, so drop design=\"true\" from the point mass"
         )
-    lower = float(el.get("lower", "0"))
-    upper = float(el.get("upper", "inf"))
+    lower = R.number(el, "lower", what, required=False, positive=False)
+    upper = R.number(el, "upper", what, required=False, positive=False)
+    lower = 0.0 if lower is None else lower
+    upper = np.inf if upper is None else upper
     if design and not lower <= upper:
         raise InvalidDescription(f"{what}: lower bound {lower} is above upper bound {upper}")
     if design and lower < 0.0:
@@ -529,10 +579,10 @@ def _parse_joint_annotation(el: ET.Element, joints: dict[str, Joint],
     if name not in moving:
         raise JointNotFound(name, moving)
     what = f"<pinflex:joint name='{name}'>"
-    locked_text = el.get("locked", "false").lower()
-    if locked_text not in ("1", "true", "yes", "0", "false", "no"):
+    locked_text = el.get("locked", "false").strip().lower()
+    if locked_text not in ("1", "true", "0", "false"):
         raise InvalidDescription(f"{what}: locked='{el.get('locked')}' must be true or false")
-    locked = locked_text in ("1", "true", "yes")
+    locked = locked_text in ("1", "true")
     prismatic = joints[name].type == "prismatic"
     unit = "N/m" if prismatic else "N m/rad"
     stiffness = R.number(el, "stiffness", what, required=False, design_ok=True, unit=unit)

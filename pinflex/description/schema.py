@@ -49,13 +49,14 @@ from dataclasses import dataclass, field
 from typing import TypeGuard
 
 from pinflex.description.types import NAMESPACE
+from pinflex.fields import Field
 
 _NS = "{" + NAMESPACE + "}"
 
 #: Most beam elements on one link. Dense modal analysis costs O(n^2) memory and O(n^3) time in
 #: the dof count n (6 per node in space, 3 in plane): 4096 elements on one spatial link are
 #: about 24,600 dof, 4.8 GB per matrix; the memory estimate of
-#: :func:`pinflex.resources.check_model_size` refuses such models before any assembly.
+#: :func:`pinflex.resources.check_model_size` refuses such models before any assembly
 MAX_ELEMENTS_PER_LINK = 4096
 
 #: Largest coordinate of a point or vector attribute [m]; the hard bounds of the other
@@ -66,44 +67,11 @@ MAX_COORDINATE = 1e6
 #: Elements that plain URDF also has at the top level (not flagged as a missing prefix).
 URDF_TOP_LEVEL = ("link", "joint", "material", "transmission", "gazebo")
 
-_REFERENCE = re.compile(r"^\{\s*([A-Za-z_][A-Za-z0-9_]*)\s*\}$")
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
+_REFERENCE = re.compile(r"\{[ \t]*([A-Za-z_][A-Za-z0-9_]*)[ \t]*\}", re.ASCII)
 
 
-@dataclass(frozen=True)
-class Attr:
-    """One attribute of a pinflex element.
-
-    Attributes:
-        kind: 'float', 'int', 'vec3', 'bool', 'choice', 'name' (letters, digits, '_', '.',
-            '-'), 'ident' (letters, digits, '_') or 'text'.
-        required: Whether it must be present.
-        gt, ge, le, lt: Hard bounds (refused outside, always).
-        physical: ``(low, high)`` outside which the value is non-physical for a robot link
-            (:class:`ImplausibleValue`, or a warning with ``plausibility="warn"``).
-        plausible: ``(low, high)`` outside which a :class:`PlausibilityWarning` is issued.
-        why: Reason shown with a physical/plausible finding.
-        unit: Unit shown in messages.
-        choices: Allowed values of a 'choice'.
-        reference: Whether ``{parameter}`` may stand for the number (each component of a
-            'vec3'); true by default, as any numeric pinflex attribute may be a parameter.
-        doc: One line of documentation.
-    """
-
-    kind: str = "float"
-    required: bool = False
-    gt: float | None = None
-    ge: float | None = None
-    le: float | None = None
-    lt: float | None = None
-    physical: tuple[float, float] | None = None
-    plausible: tuple[float, float] | None = None
-    why: str = ""
-    unit: str = ""
-    choices: tuple[str, ...] = ()
-    reference: bool = True
-    doc: str = ""
+#: An attribute of a pinflex element is one field of the schema engine (:mod:`pinflex.fields`).
+Attr = Field
 
 
 Report = Callable[..., None]
@@ -206,12 +174,13 @@ def _section_rule(v: dict, report: Report, ctx: _Context) -> None:
             report("J", f"J = {J:g} m^4 is above the polar moment Iy + Iz = {Iy + Iz:g} m^4, "
                    "which no cross-section allows", warning=True)
         extent = 2.0 * math.sqrt(max(Iy, Iz) / A)  # I <= A (h/2)^2 for a section of height h
-    elif shape == "solid_circle":
-        extent = v["diameter"]
-    elif shape == "hollow_circle":
-        extent = v["outer_diameter"]
     else:
-        extent = max(v["width"], v["height"])
+        dims = {"solid_circle": ("diameter",), "hollow_circle": ("outer_diameter",),
+                "rectangle": ("width", "height")}[shape]
+        extent = max(v[k] for k in dims)
+        upper = max(ctx.upper.get(k, v[k]) for k in dims)
+        if upper > extent:
+            ctx.checked.extents_upper[ctx.owner] = upper
     ctx.checked.extents[ctx.owner] = extent
 
 
@@ -418,6 +387,48 @@ SCHEMA: dict[str, Element] = {
 }
 
 
+# --------------------------------------------------------------------- plain URDF numbers
+_XYZ = Field("vec3", unit="m", doc="position")
+_RPY = Field("vec3", le=1e3, unit="rad", doc="roll, pitch, yaw")
+_ORIGIN = {"xyz": _XYZ, "rpy": _RPY}
+_LENGTH = Field(gt=0.0, le=MAX_COORDINATE, unit="m")
+_GEOMETRY = {
+    "box": {"size": Field("vec3", unit="m", doc="box edges")},
+    "cylinder": {"radius": _LENGTH, "length": _LENGTH},
+    "capsule": {"radius": _LENGTH, "length": _LENGTH},
+    "sphere": {"radius": _LENGTH},
+    "mesh": {"scale": Field("vec3", le=1e6, doc="mesh scale factors")},
+}
+
+#: Every numeric attribute of plain URDF that Pinocchio reads, by element path below
+#: ``<link>`` or ``<joint>``: pinflex checks them with its own number grammar before
+#: Pinocchio parses the file, so the two never read a value differently.
+URDF_NUMBERS: dict[tuple[str, ...], dict[str, Field]] = {
+    ("link", "inertial", "origin"): _ORIGIN,
+    ("link", "inertial", "mass"): {"value": Field(le=1e9, unit="kg", doc="link mass")},
+    ("link", "inertial", "inertia"): {
+        k: Field(ge=-1e12, le=1e12, unit="kg m^2", doc="inertia about the centre of mass")
+        for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
+    **{("link", kind, "origin"): _ORIGIN for kind in ("visual", "collision")},
+    **{("link", kind, "geometry", shape): attrs for kind in ("visual", "collision")
+       for shape, attrs in _GEOMETRY.items()},
+    ("joint", "origin"): _ORIGIN,
+    ("joint", "axis"): {"xyz": Field("vec3", doc="joint axis")},
+    ("joint", "limit"): {
+        "lower": Field(unit="rad or m", doc="lower joint limit"),
+        "upper": Field(unit="rad or m", doc="upper joint limit"),
+        "effort": Field(ge=0.0, unit="N m or N", doc="largest effort"),
+        "velocity": Field(ge=0.0, unit="rad/s or m/s", doc="largest speed"),
+    },
+    ("joint", "dynamics"): {"damping": Field(ge=0.0, le=1e12, doc="viscous damping"),
+                            "friction": Field(ge=0.0, le=1e12, doc="Coulomb friction")},
+    ("joint", "calibration"): {"rising": Field(), "falling": Field()},
+    ("joint", "safety_controller"): {
+        "soft_lower_limit": Field(), "soft_upper_limit": Field(), "k_position": Field(),
+        "k_velocity": Field()},
+}
+
+
 # --------------------------------------------------------------------- checking
 @dataclass
 class Checked:
@@ -425,11 +436,14 @@ class Checked:
 
     Attributes:
         extents: Largest cross-section dimension [m] by flexible link name.
+        extents_upper: The same with every design parameter of a named shape's dimensions
+            at its upper bound, where that is larger.
         references: ``(element, attribute, name)`` of every ``{name}`` reference.
         declared: Names declared for references.
     """
 
     extents: dict[str, float] = field(default_factory=dict)
+    extents_upper: dict[str, float] = field(default_factory=dict)
     references: list[tuple[str, str, str]] = field(default_factory=list)
     declared: set[str] = field(default_factory=set)
 
@@ -440,6 +454,9 @@ class _Context:
     attrib: dict
     owner: str  # the flexible link the element belongs to ('' if none)
     checked: Checked
+    #: ``{attribute: value at the design upper bound}`` of attributes that reference a
+    #: design parameter (an assignment may move them there).
+    upper: dict = field(default_factory=dict)
 
 
 def _num(x) -> TypeGuard[float]:

@@ -11,6 +11,8 @@ bound to so that a wrong namespace is caught even when its URI looks nothing lik
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
@@ -42,15 +44,118 @@ class XmlDocument:
         return self.lines.get(id(el))
 
 
+def input_path(path, what: str = "file", error: type[PinflexError] = UnreadableFile) -> Path:
+    """``path`` as a :class:`Path`: a ``str`` or path-like without NUL; else ``error``."""
+    if isinstance(path, Path):
+        out = path
+    elif isinstance(path, str) or isinstance(path, os.PathLike):
+        out = Path(path)
+    else:
+        raise error(f"{what} must be a file path, got {type(path).__name__} {_short(path)}")
+    if "\x00" in str(out):
+        raise error(f"{what} {_short(str(out))} contains a NUL character")
+    return out
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:60] + "..." + text[-15:]
+
+
+def file_kind(path: Path, what: str, error: type[PinflexError]) -> os.stat_result:
+    """``stat`` of an existing regular file, or ``error`` saying why it cannot be read."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise error(f"{what} {_short(str(path))} does not exist") from None
+    except OSError as exc:  # name too long, not a directory, permission, loop
+        raise error(f"{what} {_short(str(path))} cannot be read: "
+                    f"{exc.strerror or type(exc).__name__}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"{what} '{path}' is not a regular file")
+    return st
+
+
+def confine(path: Path, roots, what: str, *, allow: bool = False) -> Path:
+    """``path`` resolved (symbolic links followed), refused unless it lies inside a root.
+
+    Args:
+        path: The file a description names.
+        roots: Folders it may lie in (the model's folder, package roots).
+        what: What the file is, for the message.
+        allow: Skip the check (``allow_paths=True``, ``--allow-paths``).
+
+    Raises:
+        UnsafePath: Outside every root.
+    """
+    from pinflex.exceptions import UnsafePath
+
+    resolved = Path(path).resolve()
+    if allow:
+        return resolved
+    real_roots = [Path(r).resolve() for r in roots if r is not None]
+    if any(resolved == r or resolved.is_relative_to(r) for r in real_roots):
+        return resolved
+    raise UnsafePath(
+        f"{what} {_short(str(path))} lies outside the model's folder and package roots "
+        f"({', '.join(str(r) for r in real_roots) or 'none'}); copy it there, or allow it "
+        "explicitly (allow_paths=True, --allow-paths)"
+    )
+
+
+def check_mesh_paths(urdf_xml: str, base_dir: Path | None, package_dirs, *,
+                     allow: bool = False) -> None:
+    """Refuse visual/collision meshes outside the model's folder and the package roots.
+
+    ``package://pkg/rest`` must be found under a package root (``root/pkg/rest``), a relative
+    file name under ``base_dir``; absolute names, ``file://`` URIs and ``..`` leaving those
+    folders are refused (they would be read and embedded in a preview page), unless ``allow``.
+
+    Raises:
+        UnsafePath: Naming the first mesh outside.
+    """
+    import xml.etree.ElementTree as ET
+
+    from pinflex.exceptions import UnsafePath
+
+    if allow:
+        return
+    roots = [Path(d) for d in package_dirs if d]
+    for el in ET.fromstring(urdf_xml).iter("mesh"):
+        name = el.get("filename") or ""
+        what = f"mesh '{_short(name)[1:-1]}'"
+        if name.startswith("package://"):
+            rest = name[len("package://"):]
+            found = [r / rest for r in roots if (r / rest).exists()]
+            for cand in found:
+                confine(cand, roots, what)
+            if not found and _elsewhere(rest):
+                raise UnsafePath(f"{what} is in no package root ({', '.join(map(str, roots))}) "
+                                 "but in a folder of ROS_PACKAGE_PATH/AMENT_PREFIX_PATH; allow "
+                                 "it explicitly (allow_paths=True, --allow-paths)")
+        elif name.startswith("file://") or Path(name).is_absolute():
+            raise UnsafePath(f"{what} is an absolute path; meshes are read from the model's "
+                             "folder and package roots only (allow others with "
+                             "allow_paths=True, --allow-paths)")
+        else:
+            confine((base_dir or Path(".")) / name, [base_dir or Path(".")], what)
+
+
+def _elsewhere(rest: str) -> bool:
+    """Whether ``package://rest`` exists under a ROS package path (which Pinocchio searches)."""
+    for var in ("ROS_PACKAGE_PATH", "AMENT_PREFIX_PATH"):
+        for folder in os.environ.get(var, "").split(os.pathsep):
+            if folder and ((Path(folder) / rest).exists()
+                           or (Path(folder) / "share" / rest).exists()):
+                return True
+    return False
+
+
 def read_text(path: str | Path, what: str = "file",
               error: type[PinflexError] = UnreadableFile) -> str:
     """The UTF-8 text of an input file, or ``error`` (:class:`UnreadableFile`) saying why not."""
-    path = Path(path)
-    if not path.exists():
-        raise error(f"{what} '{path}' does not exist")
-    if not path.is_file():
-        raise error(f"{what} '{path}' is not a regular file")
-    size = path.stat().st_size
+    path = input_path(path, what, error)
+    size = file_kind(path, what, error).st_size
     if size > MAX_FILE_BYTES:
         raise error(
             f"{what} '{path}' has {size} bytes, more than the {MAX_FILE_BYTES} a description "
@@ -60,16 +165,17 @@ def read_text(path: str | Path, what: str = "file",
         data = path.read_bytes()
     except OSError as exc:
         raise error(f"{what} '{path}' cannot be read: {exc.strerror}") from exc
-    return decode(data, str(path), error)
+    return decode(data, str(path), error, what)
 
 
-def decode(data: bytes, source: str, error: type[PinflexError] = UnreadableFile) -> str:
+def decode(data: bytes, source: str, error: type[PinflexError] = UnreadableFile,
+           what: str = "URDF") -> str:
     """UTF-8 text of ``data`` (BOM allowed); binary or other encodings refused."""
     nul = data.find(b"\x00")
     if nul >= 0:
         raise error(
             f"'{source}' contains NUL bytes (first at offset {nul}): it is a binary file, "
-            "not a URDF"
+            f"not a {what} (UTF-16 text is refused too: save it as UTF-8)"
         )
     try:
         return data.decode("utf-8-sig")

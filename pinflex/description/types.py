@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -9,7 +10,7 @@ import numpy as np
 
 from pinflex import beam
 from pinflex.description.params import Parameter
-from pinflex.exceptions import JointNotFound, LinkNotFound
+from pinflex.exceptions import InvalidDescription, JointNotFound, LinkNotFound
 from pinflex.linalg import skew as _skew
 from pinflex.sections import PropertyInputs
 
@@ -227,6 +228,8 @@ class RobotDescription:
         bodies: Rigid bodies on links: ``<pinflex:body>`` elements and the URDF inertia beam
             links keep (:mod:`pinflex.description.link_inertia`).
         inertia_notes: One line per flexible link saying what it kept of its URDF inertia.
+        allow_paths: Whether files named by the description (meshes) may be read from
+            outside its folder and the package roots.
     """
 
     name: str
@@ -246,6 +249,11 @@ class RobotDescription:
     values: dict[str, float] = field(default_factory=dict)
     bodies: tuple[RigidBody, ...] = ()
     inertia_notes: tuple[str, ...] = ()
+    allow_paths: bool = False
+    #: Reads the same text again with other parameter values (set by the parser; keeps this
+    #: module free of an import of the parser).
+    reparse: Callable[[dict], RobotDescription] | None = field(
+        default=None, repr=False, compare=False)
 
     def with_values(self, values: dict[str, float]) -> RobotDescription:
         """The same description with parameter values overridden (re-read from its text).
@@ -259,12 +267,17 @@ class RobotDescription:
 
         Raises:
             DesignVariableOutOfBounds: A value leaves its parameter's bounds.
-            InvalidDescription: A value is not finite.
+            ConfigurationError: ``values`` is not a mapping of names to finite numbers.
+            InvalidDescription: The description was not made by pinflex's parser.
         """
-        from pinflex.description.parse import parse
+        from pinflex.exceptions import ConfigurationError
 
-        merged = {**self.values, **{k: float(v) for k, v in values.items()}}
-        return parse(self.urdf_xml, base_dir=self.base_dir, values=merged)
+        if not isinstance(values, dict):
+            raise ConfigurationError(f"values must be a dict {{name: number}}, got {values!r}")
+        if self.reparse is None:
+            raise InvalidDescription("this description was not read by pinflex's parser, so "
+                                     "it cannot be re-read with other values")
+        return self.reparse({**self.values, **values})
 
     def require_link(self, name: str) -> None:
         """Raise :class:`LinkNotFound` unless ``name`` is a link.

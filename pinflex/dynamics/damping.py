@@ -54,6 +54,15 @@ class Damping:
             raise ConfigurationError("invalid damping: " + "; ".join(problems))
 
 
+def check_damping(damping) -> None:
+    """Refuse anything but a :class:`Damping` or None (``damping="rayleigh"`` was an
+    AttributeError deep in the integrator)."""
+    if damping is not None and not isinstance(damping, Damping):
+        raise ConfigurationError(
+            f"damping must be a pinflex Damping (e.g. Damping('rayleigh', alpha, beta)) or None, "
+            f"got {damping!r}")
+
+
 def modal_damping_matrix(Mr: np.ndarray, Kr: np.ndarray, ratios) -> np.ndarray:
     """``Mr Φ diag(2 ζ_i ω_i) Φᵀ Mr`` for the mass-normalised modes of ``(Kr, Mr)``."""
     import scipy.linalg

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from pinflex.dynamics.damping import Damping, modal_damping_matrix
+from pinflex.dynamics.damping import Damping, check_damping, modal_damping_matrix
 from pinflex.dynamics.integrators import (
     integrate,
     lowest_eig,
@@ -59,6 +59,8 @@ from pinflex.dynamics.speed import check_terms, speed_stiffness
 from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.erls.validity import VALIDITY_THRESHOLD, Validity
 from pinflex.exceptions import ConfigurationError
+from pinflex.resources import check_series
+from pinflex.trajectory.samples import in_model_order
 
 
 @dataclass
@@ -387,8 +389,12 @@ def simulate_prescribed(
     The hold phase after the stop is a constant-coefficient system, propagated exactly by its
     modes at the output rate (:func:`.modal_hold`); its ``steps`` are the output samples.
     """
-    motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
+    check_damping(damping)
+    motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(
+        in_model_order(dyn.model, trajectory))
     check_positive(after_s=after_s, sample_hz=sample_hz, rtol=rtol, atol=atol)
+    check_series((motion.duration_s + after_s) * sample_hz, 4 * dyn.model.ndof + 8,
+                 "the simulation's output", "lower sample_hz or after_s")
     check_locked_motion(dyn.model, motion.trajectory)
     if start not in ("static", "rest"):
         raise ConfigurationError(f"start = {start!r} must be 'static' or 'rest'")

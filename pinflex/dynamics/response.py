@@ -20,7 +20,6 @@ Metrics (all in metres, on ``|δ|``):
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -100,7 +99,9 @@ class VibrationReport:
         if series:
             d["times_s"] = self.times_s.tolist()
             d["deflection_m"] = self.deflection_m.tolist()
-        return json.dumps(d)
+        from pinflex.outputs import json_text
+
+        return json_text(d)
 
 
 def frame_deflection(dyn, sim, frame: str = "tool", xyz=(0.0, 0.0, 0.0), *,

@@ -73,6 +73,9 @@ def output_times(t0: float, t1: float, sample_hz: float) -> np.ndarray:
 
 def check_positive(**values) -> None:
     """Raise :class:`ConfigurationError` naming every value that is not positive and finite."""
-    bad = [f"{k} = {v!r}" for k, v in values.items() if not (np.isfinite(v) and v > 0.0)]
+    bad = [f"{k} = {v!r}" for k, v in values.items()
+           if isinstance(v, bool | np.bool_) or not isinstance(v, int | float | np.integer |
+                                                              np.floating)
+           or not (np.isfinite(v) and v > 0.0)]
     if bad:
         raise ConfigurationError("must be positive and finite: " + ", ".join(bad))

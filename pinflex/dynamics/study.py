@@ -35,10 +35,9 @@ the lower bounds) and the design the assignment finds; without them, the model a
 
 from __future__ import annotations
 
-import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from pinflex.dynamics.damping import Damping
 from pinflex.exceptions import ConfigurationError
@@ -75,116 +74,61 @@ class SimulationSettings:
     validity_threshold: float = 0.1
 
 
-_NUMBERS = {  # key: (lower, upper, lower inclusive)
-    "after_s": (0.0, math.inf, False),
-    "sample_hz": (0.0, math.inf, False),
-    "rtol": (0.0, 1.0, False),
-    "atol": (0.0, math.inf, False),
-    "rho_inf": (0.0, 1.0, True),
-    "tol": (0.0, 1.0, False),
-    "step_s": (0.0, math.inf, True),
-    "kp": (0.0, math.inf, True),
-    "kd": (0.0, math.inf, True),
-    "validity_threshold": (0.0, math.inf, False),
-}
-
-
-def _is_number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
 def parse_simulation_table(table) -> SimulationSettings:
     """Validate a ``[simulation]`` table; every problem is listed in one error.
+
+    The table is checked by the schema engine (:mod:`pinflex.fields`) against
+    :data:`pinflex.assignment.study_schema.SIMULATION`, as the rest of the study is.
 
     Raises:
         InvalidSimulationTable: Unknown keys, wrong types, values out of range.
     """
+    from pinflex.assignment.study_schema import SIMULATION, STUDY
+    from pinflex.fields import check_table
+
     if table is None:
         return SimulationSettings()
-    if not isinstance(table, dict):
-        raise InvalidSimulationTable([f"must be a table, got {type(table).__name__}"])
     problems: list[str] = []
-    known = {"drive", "damping", "gravity", "frame", "point", "terms", "strict", *_NUMBERS}
-    for k in sorted(set(table) - known):
-        problems.append(f"unknown key '{k}' (known: {', '.join(sorted(known))})")
-    out: dict = {}
-    drive = table.get("drive", "prescribed")
-    if drive not in ("prescribed", "torque"):
-        problems.append(f"drive = {drive!r} must be 'prescribed' or 'torque'")
-    else:
-        out["drive"] = drive
-    for k, (lo, hi, inclusive) in _NUMBERS.items():
-        if k not in table:
-            continue
-        v = table[k]
-        if not _is_number(v):
-            problems.append(f"{k} = {v!r} must be a finite number")
-        elif not ((lo <= v if inclusive else lo < v) and v <= hi):
-            problems.append(f"{k} = {v!r} must lie in {'[' if inclusive else '('}{lo:g}, {hi:g}]")
-        else:
-            out[k] = float(v)
-    if "terms" in table:
-        if table["terms"] not in ("eq1", "full"):
-            problems.append(f"terms = {table['terms']!r} must be 'eq1' or 'full'")
-        else:
-            out["terms"] = table["terms"]
-    if "strict" in table:
-        if not isinstance(table["strict"], bool):
-            problems.append(f"strict = {table['strict']!r} must be true or false")
-        else:
-            out["strict"] = table["strict"]
-    for k in ("gravity", "point"):
-        if k in table:
-            v = table[k]
-            if not (isinstance(v, list) and len(v) == 3 and all(_is_number(c) for c in v)):
-                problems.append(f"{k} = {v!r} must be a list of 3 finite numbers")
-            else:
-                out[k] = tuple(float(c) for c in v)
-    if "frame" in table:
-        if not isinstance(table["frame"], str) or not table["frame"]:
-            problems.append(f"frame = {table['frame']!r} must be a link name")
-        else:
-            out["frame"] = table["frame"]
-    if "damping" in table:
-        d = table["damping"]
-        if d == "none":
-            out["damping"] = Damping()
-        elif isinstance(d, dict):
-            dk = set(d) - {"kind", "alpha", "beta", "ratios"}
-            if dk:
-                problems.append(f"damping: unknown keys {sorted(dk)} (known: kind, alpha, beta, "
-                                "ratios)")
-            kind = d.get("kind")
-            if kind not in ("rayleigh", "modal"):
-                problems.append(f"damping.kind = {kind!r} must be 'rayleigh' or 'modal'")
-            bad = [f"damping.{k} = {d[k]!r} must be a finite number >= 0"
-                   for k in ("alpha", "beta") if k in d and not (_is_number(d[k]) and d[k] >= 0)]
-            problems += bad
-            ratios = d.get("ratios", [])
-            if not (isinstance(ratios, list) and all(_is_number(r) and 0 <= r < 1
-                                                     for r in ratios)):
-                problems.append(f"damping.ratios = {ratios!r} must be a list of numbers in [0, 1)")
-                ratios = []
-            if kind == "modal" and not ratios:
-                problems.append("damping.kind = 'modal' needs ratios = [...]")
-            if kind == "rayleigh" and "ratios" in d:
-                problems.append("damping.ratios belongs to kind = 'modal'")
-            if kind == "modal" and ({"alpha", "beta"} & set(d)):
-                problems.append("damping.alpha and beta belong to kind = 'rayleigh'")
-            if not problems:
-                out["damping"] = Damping(str(kind), float(d.get("alpha", 0.0)),
-                                         float(d.get("beta", 0.0)), tuple(map(float, ratios)))
-        else:
-            problems.append(f"damping = {d!r} must be 'none' or a table with kind = ...")
-    if out.get("drive") == "torque" and out.get("terms") == "full":
-        problems.append("terms = 'full' is for drive = 'prescribed' (the torque drive "
-                        "integrates eq. (1))")
-    if out.get("drive") == "torque" and isinstance(out.get("damping"), Damping) and \
-            out["damping"].kind == "modal":
-        problems.append("drive = 'torque' takes Rayleigh damping or none")
+
+    def report(where, message, level):
+        problems.append(f"{where}: {message}" if where else message)
+
+    check_table(table, SIMULATION, "", report, STUDY["simulation"].rules)
     if problems:
         raise InvalidSimulationTable(problems)
+    out: dict[str, Any] = {k: float(v) if isinstance(v, int | float) and not isinstance(v, bool)
+                           else v for k, v in table.items()
+                           if k not in ("damping", "gravity", "point")}
+    for k in ("gravity", "point"):
+        if k in table:
+            out[k] = tuple(float(c) for c in table[k])
+    d = table.get("damping", "none")
+    if isinstance(d, dict):
+        out["damping"] = Damping(str(d["kind"]), float(d.get("alpha", 0.0)),
+                                 float(d.get("beta", 0.0)),
+                                 tuple(float(r) for r in d.get("ratios", ())))
+    else:
+        out["damping"] = Damping()
     return SimulationSettings(**out)
+
+
+def check_simulation_size(settings: SimulationSettings, duration_s: float, ndof: int,
+                          nv: int) -> None:
+    """Bound a simulation's output before it starts: samples and memory, with the estimate.
+
+    Raises:
+        ResourceLimitExceeded: The output series would not fit in the memory limit
+            (:func:`pinflex.resources.check_memory`).
+    """
+    from pinflex.resources import check_series
+
+    samples = (float(duration_s) + settings.after_s) * settings.sample_hz + 1
+    # per sample: time, elastic coordinates, their rates, joint values and rates, the
+    # output point (position, velocity)
+    check_series(samples, 1 + 2 * ndof + 2 * nv + 6,
+                 f"a simulation of {duration_s + settings.after_s:g} s at {settings.sample_hz:g} "
+                 f"Hz ({samples:.3g} output samples of {ndof} coordinates)",
+                 "lower sample_hz or after_s in [simulation]")
 
 
 def load_simulation_study(path: str | Path, overrides: dict | None = None):
@@ -196,14 +140,11 @@ def load_simulation_study(path: str | Path, overrides: dict | None = None):
             with them.
     """
     from pinflex.assignment.study import load_config
+    from pinflex.description.source import read_text
+    from pinflex.validation import load_toml
 
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigurationError(f"study file '{path}' does not exist")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigurationError(f"'{path}' is not valid TOML: {exc}") from exc
+    text = read_text(path, "study file", ConfigurationError)
+    data = load_toml(text, str(path), ConfigurationError)
     table = data.get("simulation")
     if overrides:
         table = {**(table if isinstance(table, dict) else {}), **overrides}
@@ -241,6 +182,7 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
     from pinflex.dynamics.torque import simulate_torque
 
     model.description.require_link(settings.frame)
+    check_simulation_size(settings, trajectory.duration_s, model.ndof, model.nv)
     dyn = ErlsDynamics(model, y=y, gravity=list(settings.gravity))
     if settings.drive == "prescribed":
         sim = simulate_prescribed(dyn, trajectory, after_s=settings.after_s,

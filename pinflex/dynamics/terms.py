@@ -51,6 +51,11 @@ from pinflex.erls.plan import attachment
 from pinflex.erls.terms import joint_step, joint_step_rate
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
+from pinflex.validation import require_array
+
+#: Largest gravity component accepted [m/s^2] (1000 g: beyond any robot's test rig; larger
+#: values are unit slips and overflow the equations of motion).
+MAX_GRAVITY = 1e4
 
 
 @dataclass(frozen=True)
@@ -102,9 +107,11 @@ class ErlsDynamics:
         #: the model at design ``y`` (sections, materials, springs and masses from ``y``)
         self.model = model = design_model(model, y)
         self.y = y
-        g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
-        if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ConfigurationError(f"gravity must be 3 finite numbers [m/s²], got {gravity!r}")
+        g = np.zeros(3) if gravity is None else require_array(gravity, "gravity")
+        if g.shape != (3,) or not np.all(np.abs(g) <= MAX_GRAVITY):
+            raise ConfigurationError(
+                f"gravity must be 3 finite numbers of at most {MAX_GRAVITY:g} m/s² each "
+                f"({MAX_GRAVITY / 9.81:.0f} g), got {gravity!r}")
         self.gravity = g
         # eq. (1) is written over every coordinate [x; q_all]; a locked joint is a constraint
         # of the drive on its physical angle (see ``locked``), not a change of the terms

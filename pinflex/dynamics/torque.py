@@ -16,13 +16,16 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from pinflex.dynamics.damping import Damping
+from pinflex.dynamics.damping import Damping, check_damping
 from pinflex.dynamics.integrators import NewmarkRun, newmark
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, check_positive, output_times
 from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import held_rayleigh
+from pinflex.resources import check_series
+from pinflex.validation import require_number
+from pinflex.trajectory.samples import in_model_order
 
 
 def simulate_torque(
@@ -104,6 +107,11 @@ def simulate_torque(
     """
     check_positive(duration_s=duration_s, sample_hz=sample_hz, rtol=rtol, atol=atol,
                     atol_q=atol_q)
+    check_series(duration_s * sample_hz, 4 * dyn.model.ndof + 8, "the simulation's output",
+                 "lower sample_hz or duration_s")
+    check_damping(damping)
+    for name, gain in (("kp", kp), ("kd", kd)):
+        require_number(gain, f"{name} (PD gain)", ge=0.0)
     damping = damping or Damping()
     if damping.kind == "modal":
         raise ConfigurationError("the torque drive takes Rayleigh damping or none")
@@ -122,7 +130,8 @@ def simulate_torque(
     z_ref = np.concatenate([np.zeros(nx), q0])
     motion = None
     if torque is None and trajectory is not None:
-        motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
+        motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(
+            in_model_order(dyn.model, trajectory))
 
     indicator = None
     if motion is not None:  # the reference motion, before the run (strict refuses here)

@@ -12,7 +12,6 @@ veering / ambiguous events, and writes itself as CSV, JSON or a PNG chart.
 from __future__ import annotations
 
 import csv
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -20,6 +19,7 @@ from typing import Any, Literal
 import numpy as np
 
 from pinflex.exceptions import ConfigurationError, InvalidTrajectory
+from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory
 
 
@@ -111,7 +111,9 @@ class ModesAlong:
 
     def to_json(self) -> str:
         """:meth:`to_dict` as one JSON text."""
-        return json.dumps(self.to_dict())
+        from pinflex.outputs import json_text
+
+        return json_text(self.to_dict())
 
     def summary(self) -> list[dict]:
         """Per mode: minimum, maximum, start and end frequency [Hz]."""
@@ -187,21 +189,16 @@ class ModesAlong:
 def trajectory_for(arm, traj: Trajectory) -> np.ndarray:
     """Joint samples (ns, nv) of a trajectory in the arm's joint order.
 
-    Columns are matched by joint name; a trajectory with default names ``q1..qn`` and exactly
-    ``nv`` (or ``nq``) columns is taken in the arm's order (or as Pinocchio configurations).
+    Columns are matched by joint name (:meth:`Trajectory.in_order`); a trajectory built
+    without names with exactly ``nv`` (or ``nq``) columns is taken in the arm's order (or as
+    Pinocchio configurations).
+
+    Raises:
+        InvalidTrajectory: Columns naming no joint, joints without a column, duplicates.
     """
-    names = tuple(traj.joint_names)
-    if set(names) >= set(arm.joint_names):
-        idx = [names.index(n) for n in arm.joint_names]
-        return arm.check_q(traj.q[:, idx])
-    default = tuple(f"q{j + 1}" for j in range(traj.q.shape[1]))
-    if names == default and traj.q.shape[1] in (arm.nv, arm.model.nq):
+    if not traj.named and traj.q.shape[1] == arm.model.nq != arm.nv:
         return arm.check_q(traj.q)
-    missing = [n for n in arm.joint_names if n not in names]
-    raise InvalidTrajectory(
-        f"the trajectory's columns {list(names)} do not name the arm's joints; missing "
-        f"{missing} (header: t, {', '.join(arm.joint_names)})"
-    )
+    return arm.check_q(traj.in_order(arm.joint_names))
 
 
 def modes_along(
@@ -214,6 +211,7 @@ def modes_along(
     check_limits: Literal["warn", "raise"] | None = "warn",
     strict: bool = False,
     validity_threshold: float | None = None,
+    progress: ProgressBar | None = None,
 ) -> ModesAlong:
     """Tracked eigenfrequencies of ``arm`` along ``trajectory``.
 
@@ -232,6 +230,8 @@ def modes_along(
             (:class:`~pinflex.exceptions.ModelValidityWarning`): the frozen-pose modes are
             not those of the moving arm there (:func:`pinflex.dynamics.modes_at_speed`).
         validity_threshold: Default :data:`pinflex.erls.validity.VALIDITY_THRESHOLD`.
+        progress: A progress bar advanced by one per sample solved (optional; see
+            :func:`~pinflex.erls.tracking.track_modes`).
 
     Returns:
         :class:`ModesAlong` (``validity`` set for two samples or more).
@@ -240,6 +240,10 @@ def modes_along(
     from pinflex.trajectory.cartesian import check_joint_limits
 
     Q = trajectory_for(arm, trajectory)
+    from pinflex.resources import check_poses
+
+    check_poses(Q.shape[0], arm.ndof, "the frequencies along the trajectory",
+                "resample the trajectory more coarsely")
     if check_limits is not None:
         check_joint_limits(
             arm, Trajectory(trajectory.times_s, Q, arm.joint_names), on_violation=check_limits
@@ -249,7 +253,7 @@ def modes_along(
     )
     if not mode_list or min(mode_list) < 1 or max(mode_list) > arm.n_elastic:
         raise ConfigurationError(f"modes {mode_list} must lie in 1..{arm.n_elastic}")
-    tr = track_modes(arm, Q, y, modes=mode_list, extra=extra)
+    tr = track_modes(arm, Q, y, modes=mode_list, extra=extra, progress=progress)
     sorted_all = np.sqrt(np.asarray(tr.sorted_eigvals)) / (2.0 * np.pi)
     k = len(mode_list)
     times = np.asarray(trajectory.times_s, dtype=float)

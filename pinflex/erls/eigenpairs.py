@@ -7,6 +7,8 @@ solver coordinates of :mod:`pinflex.erls.solve` (one batched symmetric eigensolv
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from pinflex.exceptions import EigenSolverError
@@ -78,6 +80,14 @@ class PoseMap:
         twist = solve.root_twists(model, plan, terms, ns)
         self.links = [(c.start, c.stop, twist[link], g) for link, c, g in _link_maps(model)
                       if twist.get(link) is not None]
+
+    @classmethod
+    def joined(cls, maps: Sequence[PoseMap]) -> PoseMap:
+        """One map of the samples of ``maps`` (built on consecutive chunks), in their order."""
+        out = cls.__new__(cls)
+        out.links = [(a, z, np.concatenate([m.links[i][2] for m in maps]), G)
+                     for i, (a, z, _, G) in enumerate(maps[0].links)]
+        return out
 
     def move(self, phi: np.ndarray, src, dst) -> np.ndarray:
         """Shapes ``phi`` (b, nx, k) of samples ``src`` in the coordinates of samples ``dst``.

@@ -151,6 +151,10 @@ def _condition(n: str, v, armature: float) -> JointCondition:
             )
         return JointCondition(n, v, 0.0 if v == "free" else np.inf,
                               0.0 if v == "locked" else damping, armature)
+    if isinstance(v, bool | np.bool_) or not isinstance(v, int | float | np.integer | np.floating):
+        raise ConfigurationError(
+            f"joint '{n}': condition {v!r} must be 'free', 'locked', a stiffness "
+            "[N m/rad or N/m] or a pinflex.JointSpec")
     k = float(v)
     if not np.isfinite(k) or k <= 0.0:
         raise InvalidBeamProperty(

@@ -38,6 +38,11 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex.description import NAMESPACE, RobotDescription, load
+from pinflex.description.crosscheck import (
+    check_pinocchio_reading,
+    native_stderr,
+    urdfdom_message,
+)
 from pinflex.erls import assembly, kinematics, modal
 from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
@@ -58,7 +63,7 @@ from pinflex.exceptions import (
     NoFlexibleLink,
 )
 from pinflex.linalg import skew
-from pinflex.resources import check_modal
+from pinflex.resources import check_modal, check_model_size
 from pinflex.validation import require_array, require_count
 
 
@@ -137,6 +142,19 @@ def _placement_constants(plan: ModelPlan) -> tuple:
         nodes_h = _read_only(np.hstack([bp.nodes, np.ones((bp.nodes.shape[0], 1))]))
         rows.append((link, nodes_h, bp.spec.rotation))
     return tuple(rows)
+
+
+#: What ``dir(model)`` lists and the documentation describes: the queries, construction and
+#: the model's joint and design attributes. The other methods (pose checks, assembly terms,
+#: root twists, ...) serve pinflex's own layers.
+PUBLIC = (
+    "model", "description", "plan", "nv", "nx", "ny", "ndof", "n_elastic", "n_rigid", "planar",
+    "plane_normal", "coordinates", "joint_names", "joint_conditions", "joint_switch",
+    "joint_labels", "kept_joints", "design", "design_names", "y0", "point_mass_values",
+    "frequencies", "modes", "matrices", "node_placements", "effective_inertias",
+    "effective_model", "pin_configuration", "from_configuration", "from_pinocchio",
+    "with_values", "create_data", "workspace",
+)
 
 
 class FlexibleModel:
@@ -229,14 +247,22 @@ class FlexibleModel:
         if _reuse is not None:
             self.model = _reuse.model  # the same URDF: Pinocchio's model is shared, unchanged
         else:
+            native: list[str] = []
             try:
-                self.model = pin.buildModelFromXML(description.urdf_xml)
+                with native_stderr() as native:  # urdfdom's messages go into the error
+                    self.model = pin.buildModelFromXML(description.urdf_xml)
             except Exception as exc:  # Pinocchio raises plain RuntimeError/ValueError
-                raise InvalidDescription(f"Pinocchio could not load the URDF: {exc}") from exc
+                said = urdfdom_message(native)
+                raise InvalidDescription(f"Pinocchio could not load the URDF: {exc}"
+                                         + (f" (urdfdom: {said})" if said else "")) from None
+            check_pinocchio_reading(description, self.model, native)
         self.joint_names = tuple(self.model.names[1:])
         self.nv = self.model.nv
         if self.nv != len(self.joint_names):
             raise InvalidDescription("only joints with one degree of freedom are supported")
+        if coordinates is not None and not isinstance(coordinates, str):
+            raise ConfigurationError(f"coordinates={coordinates!r}: expected 'relative' or "
+                                     "'absolute'")
         absolute = description.absolute_coordinates if coordinates is None else (
             coordinates == "absolute"
         )
@@ -271,6 +297,8 @@ class FlexibleModel:
         if _reuse is not None:
             plan = _reuse.plan
         else:
+            check_model_size([f.elements for f in description.flexible.values()], self.nv,
+                             self.planar, f"the model of robot '{description.name}'")
             plan = build_plan(self)
             conditions = joint_conditions.layout(self, plan, joints)
             plan = replace(plan, conditions=conditions,
@@ -304,6 +332,16 @@ class FlexibleModel:
     def __delattr__(self, name: str) -> None:
         """Refused: the model is constant."""
         raise ImmutableModelError(f"FlexibleModel is constant once built: cannot delete '{name}'")
+
+    def __repr__(self) -> str:
+        """Robot, dof, flexible links, joint conditions and design, in a few lines."""
+        from pinflex.summaries import model_summary
+
+        return model_summary(self)
+
+    def __dir__(self) -> list[str]:
+        """The public surface (:data:`PUBLIC`); the methods other layers call stay callable."""
+        return sorted(set(PUBLIC) | {n for n in object.__dir__(self) if n.startswith("_")})
 
     def __getstate__(self) -> dict:
         """State for pickling (the per-thread workspaces stay behind)."""

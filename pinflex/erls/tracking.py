@@ -84,6 +84,8 @@ from scipy.optimize import linear_sum_assignment
 
 from pinflex.erls.eigenpairs import PoseMap, eigenpairs, solver_eigenpairs
 from pinflex.exceptions import ConfigurationError
+from pinflex.progress import ProgressBar
+from pinflex.resources import check_poses
 
 __all__ = [
     "ModeEvent",
@@ -447,6 +449,7 @@ def track_modes(
     veer_mac: float = 0.5,
     check_bounds: bool = True,
     coordinates: str = "auto",
+    progress: ProgressBar | None = None,
 ) -> ModeTracking:
     """Track modes of a FlexibleModel by shape along joint samples.
 
@@ -471,6 +474,10 @@ def track_modes(
             :class:`PoseMap` (the same MACs as in nodal coordinates); ``"nodal"``: eigenpairs
             of the nodal-coordinate pencil (:func:`eigenpairs`); ``"auto"`` (default): solver
             where the conditioned solve covers the model and resolves the modes, else nodal.
+        progress: A progress bar advanced by one per sample solved (optional; its total
+            should be the number of samples). The samples are solved in chunks of
+            ``_CHUNK``; when the solver coordinates give way to nodal ones the bar starts
+            again.
 
     Returns:
         A :class:`ModeTracking`; ``sorted_eigvals`` holds the lowest ``max(modes) + extra``
@@ -490,14 +497,16 @@ def track_modes(
         raise ConfigurationError(f"coordinates = {coordinates!r}: use 'auto', 'solver' or "
                                  "'nodal'")
     solver = coordinates != "nodal"
-    pairs = _pairs(model, Q, Y if Y.ndim == 1 else Yb, n, check_bounds, solver)
+    pairs = _pairs(model, Q, Y if Y.ndim == 1 else Yb, n, check_bounds, solver,
+                   progress=progress)
     if pairs is None:
         if coordinates == "solver":
             raise ConfigurationError("the conditioned solve does not cover this model or "
                                      "does not resolve the tracked modes: use "
                                      "coordinates='nodal' or 'auto'")
         solver = False
-        pairs = _pairs(model, Q, Yb, n, check_bounds, False)
+        _restart(progress)
+        pairs = _pairs(model, Q, Yb, n, check_bounds, False, progress=progress)
     assert pairs is not None
     lam, phi, mass, pose_map = pairs
     start, start_shapes = 0, None
@@ -516,15 +525,55 @@ def track_modes(
                 raise ConfigurationError("the conditioned solve does not resolve the tracked "
                                          "modes on the way from the reference point: use "
                                          "coordinates='nodal' or 'auto'")
+            _restart(progress)
             return track_modes(model, Q, y, modes=modes, reference=reference, extra=extra,
                                mac_min=mac_min, veer_rtol=veer_rtol, veer_mac=veer_mac,
-                               check_bounds=check_bounds, coordinates="nodal")
+                               check_bounds=check_bounds, coordinates="nodal",
+                               progress=progress)
     return track(lam, phi, mass, modes=modes, start=start, start_shapes=start_shapes,
                  mac_min=mac_min, veer_rtol=veer_rtol, veer_mac=veer_mac, pose_map=pose_map)
 
 
-def _pairs(model, Q, Y, n, check_bounds, solver, one_pose=False):
-    """``(eigvals, shapes, mass, pose_map)`` of the samples; None if solver coordinates fail."""
+_CHUNK = 128  # samples per batched eigensolve (paces the progress bar, bounds temporaries)
+
+
+def _restart(progress: ProgressBar | None) -> None:
+    if progress is not None:
+        progress.done = 0
+
+
+def _pairs(model, Q, Y, n, check_bounds, solver, one_pose=False, progress=None):
+    """``(eigvals, shapes, mass, pose_map)`` of the samples; None if solver coordinates fail.
+
+    Solved in chunks of ``_CHUNK`` samples (each sample's eigenproblem is its own, so the
+    result is the one batched solve's); ``progress`` advances by the samples of each chunk.
+    """
+    ns = Q.shape[0]
+    if one_pose or ns <= _CHUNK:
+        parts = [_pairs_once(model, Q, Y, n, check_bounds, solver, one_pose)]
+        if progress is not None:
+            progress.update(ns)
+    else:
+        parts = []
+        for a in range(0, ns, _CHUNK):
+            b = min(a + _CHUNK, ns)
+            part = _pairs_once(model, Q[a:b], Y if Y.ndim == 1 else Y[a:b], n, check_bounds,
+                               solver, False)
+            if progress is not None:
+                progress.update(b - a)
+            parts.append(part)
+            if part is None:
+                break
+    if any(p is None for p in parts):
+        return None
+    if len(parts) == 1:
+        return parts[0]
+    lam, phi, mass = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    maps = [p[3] for p in parts]
+    return lam, phi, mass, None if maps[0] is None else PoseMap.joined(maps)
+
+
+def _pairs_once(model, Q, Y, n, check_bounds, solver, one_pose):
     if solver:
         return solver_eigenpairs(model, Q, Y, n_modes=n, one_pose=one_pose)
     return (*eigenpairs(model, Q, Y, n_modes=n, check_bounds=check_bounds), None)
@@ -546,7 +595,10 @@ def _lead_in(model, Q, Y, start, q0, y0, n, mac_min, check_bounds, solver):
     span = np.array([max(d.upper - d.lower, 1e-12) if np.isfinite(d.upper - d.lower) else
                      max(abs(d.nominal), 1.0) for d in model.design])
     dy = float(np.max(np.abs(ys - y0) / span)) if model.ny else 0.0
-    nsteps = int(np.ceil(max(dq / step if step > 0 else 0.0, 20.0 * dy, 1.0)))
+    nsteps = float(np.ceil(max(dq / step if step > 0 else 0.0, 20.0 * dy, 1.0)))
+    nsteps = check_poses(nsteps, model.ndof, f"the walk of {dq:.3g} from the expansion point "
+                         "to the trajectory's first sample (in steps of the trajectory's)",
+                         "expand at a point nearer the trajectory (q0)", maximum=20_000)
     t = np.linspace(0.0, 1.0, nsteps + 1)[:, None]
     Qp = q0 + t * (qs - q0)
     Yp = y0 + t * (ys - y0)

@@ -41,6 +41,7 @@ import scipy.linalg
 
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import held_rayleigh
+from pinflex.validation import require_array, require_number
 
 
 def _relative_rows(arm, q: np.ndarray) -> np.ndarray:
@@ -111,10 +112,14 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None,
         ``coordinates`` (ndof,), ``states`` (2 ndof,), ``inputs`` (nv,), ``outputs`` (ndof,)
         and ``q``, ``y``.
     """
-    if not np.isfinite(zeta) or zeta < 0.0:
-        raise ConfigurationError(f"zeta = {zeta!r} must be a finite number >= 0")
-    if rayleigh is not None and (np.shape(rayleigh) != (2,) or min(rayleigh) < 0.0):
-        raise ConfigurationError("rayleigh must be (alpha, beta) with both >= 0")
+    zeta = require_number(zeta, "zeta (a damping ratio, not a percentage)", ge=0.0, le=1.0)
+    if rayleigh is not None:
+        rayleigh = tuple(require_array(rayleigh, "rayleigh (alpha, beta)").tolist())
+        if len(rayleigh) != 2 or min(rayleigh) < 0.0 or rayleigh[0] > 1e6 or \
+                rayleigh[1] > 1.0:  # beyond: damping ratios of 1e3 and more at any mode
+            raise ConfigurationError(
+                f"rayleigh must be (alpha [1/s], beta [s]) with 0 <= alpha <= 1e6 and "
+                f"0 <= beta <= 1, got {rayleigh}")
     if torque_input not in ("motor", "generalized"):
         raise ConfigurationError(f"torque_input = {torque_input!r}: choose 'motor' (the "
                                  "actuator on both bodies of the joint) or 'generalized'")

@@ -107,6 +107,8 @@ def describe_pinocchio(
 
 def example_robot_urdf(name: str) -> Path:
     """Path of the URDF of an example-robot-data arm (see :data:`EXAMPLE_ROBOTS`)."""
+    if not isinstance(name, str):
+        raise InvalidDescription(f"an example robot is named by a string, got {name!r}")
     if name in EXAMPLE_ROBOTS:
         rel = EXAMPLE_ROBOTS[name]
     elif name.endswith(".urdf"):

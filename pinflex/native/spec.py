@@ -23,27 +23,28 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from pinflex.beam import Section
 from pinflex.description.types import NAMESPACE
 from pinflex.exceptions import InvalidBeamProperty, InvalidDescription
 from pinflex.materials import Material
+from pinflex.validation import require_bool, require_count, require_number
 
 _NS = "{" + NAMESPACE + "}"
 
 
-def _num(value: float) -> str:
-    """Shortest text that parses back to the same float."""
-    return repr(float(value))
+def _num(value: float, what: str = "value") -> str:
+    """Shortest text that parses back to the same float; only real numbers (no strings,
+    booleans or None: ``float("1_0")`` and ``float(True)`` would be read silently)."""
+    return repr(require_number(value, what, error=InvalidDescription))
 
 
 def _vec(values: Sequence[float], what: str) -> str:
-    try:
-        vals = [float(v) for v in values]
-    except (TypeError, ValueError) as exc:
-        raise InvalidDescription(f"{what}: expected three numbers, got {values!r}") from exc
-    if len(vals) != 3:
+    if isinstance(values, str | bytes) or not isinstance(values, Sequence | np.ndarray) or \
+            len(values) != 3:
         raise InvalidDescription(f"{what}: expected three numbers, got {values!r}")
-    return " ".join(_num(v) for v in vals)
+    return " ".join(_num(v, what) for v in values)
 
 
 @dataclass(frozen=True)
@@ -95,9 +96,8 @@ class Beam:
             InvalidBeamProperty: ``elements`` is not an integer.
             InvalidDescription: ``tip`` or ``normal`` is not three numbers.
         """
-        el = ET.Element(_NS + "flexible", {"link": link, "elements": str(int(self.elements))})
-        if int(self.elements) != self.elements:
-            raise InvalidBeamProperty(f"Beam.elements must be an integer, got {self.elements!r}")
+        elements = require_count(self.elements, "Beam.elements", error=InvalidBeamProperty)
+        el = ET.Element(_NS + "flexible", {"link": link, "elements": str(elements)})
         if self.tip is not None:
             el.set("tip", _vec(self.tip, f"beam on '{link}' tip"))
         if self.normal is not None:
@@ -147,10 +147,12 @@ class Mass:
             "name": name,
             "link": self.link,
             "xyz": _vec(self.xyz, f"point mass '{name}' xyz"),
-            "mass": _num(self.mass),
+            "mass": _num(self.mass, f"point mass '{name}' mass"),
         }
-        if self.design:
-            attrs.update(design="true", lower=_num(self.lower), upper=_num(self.upper))
+        if require_bool(self.design, f"point mass '{name}' design", error=InvalidDescription):
+            attrs.update(design="true", lower=_num(self.lower, f"point mass '{name}' lower"))
+            if self.upper != math.inf:  # unbounded above: no attribute
+                attrs["upper"] = _num(self.upper, f"point mass '{name}' upper")
         return ET.Element(_NS + "point_mass", attrs)
 
 

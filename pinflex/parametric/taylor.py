@@ -24,6 +24,8 @@ from pinflex.jets.evaluation import monomial_rows
 from pinflex.linalg import readonly as _readonly
 from pinflex.parametric import evaluation
 from pinflex.parametric.evaluation import RADIUS_TOL, EvaluationPlan
+from pinflex.summaries import taylor_summary
+from pinflex.validation import float_array, require_bool
 
 _TINY = np.finfo(float).tiny
 _MAX = np.maximum.reduce  # the ufunc itself: ndarray.max adds a Python-level wrapper per call
@@ -61,6 +63,8 @@ class TaylorModel:
     A Taylor model never changes after construction: every array is a read-only copy, and
     the derived fields are computed once, when it is built. It pickles (process pools, Dask
     batches): only the defining fields are stored, the derived ones are rebuilt on loading.
+    Unpickling runs code named in the file (that is how pickle works, not a pinflex choice):
+    load pickled models only from files you trust.
     """
 
     space: JetSpace
@@ -81,6 +85,9 @@ class TaylorModel:
     degree_blocks: Mapping[str, np.ndarray] = field(init=False, repr=False, compare=False)
     spectral_weights: np.ndarray | None = field(init=False, repr=False, compare=False)
     evaluation_plan: EvaluationPlan = field(init=False, repr=False, compare=False)
+
+    def __repr__(self) -> str:
+        return taylor_summary(self)  # order, variables, modes, radius: no array dumps
 
     def __post_init__(self) -> None:
         if self.freq_jets is None:
@@ -371,6 +378,15 @@ class TaylorModel:
                 variable the model does not expand, or (with the check on) is not finite.
             TaylorRadiusExceeded: ``strict`` and some sample's estimated error exceeds ``tol``.
         """
+        if not isinstance(quantity, str) or quantity not in ("eigval", "freq_hz"):
+            raise ConfigurationError(f"quantity = {quantity!r}: expected 'eigval' or 'freq_hz'")
+        if not (type(Q) is np.ndarray and Q.dtype == np.float64):
+            Q = float_array(Q, "joint values Q")  # finiteness: checked with warn/strict
+        linear_in_design = require_bool(linear_in_design, "linear_in_design")
+        warn, strict = require_bool(warn, "warn"), require_bool(strict, "strict")
+        if isinstance(tol, bool) or not isinstance(tol, int | float | np.number) or \
+                not tol > 0.0:  # inf: no tolerance; NaN refused
+            raise ConfigurationError(f"tol must be a positive number, got {tol!r}")
         plan = self.evaluation_plan
         grid = plan.grid
         if grid is not None and Y is None:

@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..summaries import dataclass_summary
 from .beams import Planform
 from .chain import PrbdmChain, build_chain
 from .problem import Evaluation, MappingProblem, decode, static_stiffness
@@ -69,6 +70,8 @@ class PrbdmFit:
         n_samples: Designs of the global sample (paper definitions).
         load_n: Tip forces of the paper definitions' deflection loss, (l, 2) [N].
     """
+
+    __repr__ = dataclass_summary  # fields summarised: no array dumps
 
     beam: str
     n_joints: int

@@ -23,7 +23,13 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from pinflex.exceptions import IKNotConverged, InvalidPath, LinkNotFound, TrajectoryWarning
+from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory, solve_ik
+from pinflex.validation import require_count, require_number
+
+#: Most samples of a workspace path: each is an inverse-kinematics solve (a few ms), and
+#: each later costs a modal analysis; 20,000 samples already take minutes.
+MAX_PATH_SAMPLES = 20_000
 
 
 def sample_polyline(
@@ -35,10 +41,10 @@ def sample_polyline(
         raise InvalidPath(f"waypoints must have shape (k, 3) with k >= 2, got {pts.shape}")
     if not np.all(np.isfinite(pts)):
         raise InvalidPath("waypoints must be finite")
-    if int(n_samples) < 2:
-        raise InvalidPath(f"n_samples must be >= 2, got {n_samples}")
-    if not duration_s > 0.0:
-        raise InvalidPath(f"duration_s must be positive, got {duration_s!r}")
+    n_samples = require_count(n_samples, "n_samples (path samples)", minimum=2,
+                              maximum=MAX_PATH_SAMPLES, error=InvalidPath)
+    duration_s = require_number(duration_s, "duration_s", gt=0.0, le=1e6, unit="s",
+                                error=InvalidPath)
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     if np.any(seg <= 1e-12):
         k = int(np.argmin(seg))
@@ -68,11 +74,14 @@ def solve_pose_ik(
     *,
     tol: float = 1e-10,
     max_iter: int = 200,
+    progress: ProgressBar | None = None,
 ) -> np.ndarray:
     """Position and orientation IK (Levenberg–Marquardt), warm-started along the points.
 
     The error is ``[p* − p; log₃(R* Rᵀ)]`` in world axes (metres and radians weighted alike),
     the Jacobian the frame's LOCAL_WORLD_ALIGNED one; a step is kept when it lowers the error.
+
+    ``progress`` (optional) is advanced by one per sample solved.
 
     Returns:
         Configurations (ns, nq).
@@ -107,6 +116,8 @@ def solve_pose_ik(
         if norm > tol:
             raise IKNotConverged(k, target, norm, q, tol)
         out[k] = q
+        if progress is not None:
+            progress.update()
     return out
 
 
@@ -123,6 +134,7 @@ def path_trajectory(
     on_limits: Literal["raise", "warn"] = "raise",
     tol: float = 1e-10,
     name: str | None = None,
+    progress: ProgressBar | None = None,
 ) -> Trajectory:
     """Joint trajectory of ``arm`` whose ``frame`` follows straight lines through waypoints.
 
@@ -143,6 +155,8 @@ def path_trajectory(
             outside the URDF joint limits.
         tol: IK tolerance [m, rad].
         name: Label of the trajectory.
+        progress: A progress bar advanced by one per sample solved (optional; its total
+            should be ``n_samples``).
 
     Returns:
         A :class:`~pinflex.Trajectory` in the arm's coordinates with its joint names.
@@ -160,7 +174,7 @@ def path_trajectory(
     q0 = np.zeros(arm.nv) if q_init is None else arm.check_q(q_init)
     qpin0 = arm.pin_configuration(q0)
     if orientation is None:
-        qpin = np.array(solve_ik(model, data, fid, pts, qpin0, tol_m=tol).q)
+        qpin = np.array(solve_ik(model, data, fid, pts, qpin0, tol_m=tol, progress=progress).q)
     else:
         if isinstance(orientation, str):
             if orientation != "keep":
@@ -173,7 +187,7 @@ def path_trajectory(
                 R = pin.rpy.rpyToMatrix(*R)
             if R.shape != (3, 3) or np.abs(R.T @ R - np.eye(3)).max() > 1e-9:
                 raise InvalidPath("orientation must be a rotation matrix (3, 3) or rpy (3,)")
-        qpin = solve_pose_ik(model, data, fid, pts, R, qpin0, tol=tol)
+        qpin = solve_pose_ik(model, data, fid, pts, R, qpin0, tol=tol, progress=progress)
     q = arm.from_configuration(qpin)
     # continuous joints come back in (-pi, pi]: unwrap along the motion, starting near q_init
     rel = q @ arm.coord_map.T
@@ -253,7 +267,8 @@ _PATH_KEYS = {"frame", "waypoints", "relative", "start_q", "samples", "duration_
               "orientation", "on_limits"}
 
 
-def path_from_spec(arm, spec: dict, *, name: str | None = None) -> Trajectory:
+def path_from_spec(arm, spec: dict, *, name: str | None = None,
+                   progress: ProgressBar | None = None) -> Trajectory:
     """Trajectory of a path specification (the ``[trajectory.path]`` table of a study).
 
     Keys: ``frame`` (required), ``waypoints`` (required, list of [x, y, z] [m]),
@@ -261,7 +276,8 @@ def path_from_spec(arm, spec: dict, *, name: str | None = None) -> Trajectory:
     prepended as the first point; default false), ``start_q`` (joint values, default zeros),
     ``samples`` (default 50), ``duration_s`` (default 1), ``profile``
     (``minimum_jerk``/``uniform``), ``orientation`` (``"keep"``, ``"free"`` (default) or
-    roll-pitch-yaw [rad]), ``on_limits`` (``raise``/``warn``).
+    roll-pitch-yaw [rad]), ``on_limits`` (``raise``/``warn``). ``progress`` (optional) is
+    advanced by one per sample solved.
     """
     unknown = set(spec) - _PATH_KEYS
     if unknown:
@@ -285,5 +301,5 @@ def path_from_spec(arm, spec: dict, *, name: str | None = None) -> Trajectory:
         duration_s=float(spec.get("duration_s", 1.0)),
         profile=spec.get("profile", "minimum_jerk"),
         q_init=q0, orientation=orientation,
-        on_limits=spec.get("on_limits", "raise"), name=name,
+        on_limits=spec.get("on_limits", "raise"), name=name, progress=progress,
     )

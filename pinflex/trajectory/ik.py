@@ -12,6 +12,7 @@ from pinflex.exceptions import (
     InvalidPath,
 )
 from pinflex.linalg import readonly as _readonly
+from pinflex.progress import ProgressBar
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,7 @@ def solve_ik(
     tol_m: float = 1e-10,
     max_iter: int = 100,
     damping: float = 1e-3,
+    progress: ProgressBar | None = None,
 ) -> IKSolution:
     """Position-only inverse kinematics of one frame, warm-started along the points.
 
@@ -58,6 +60,7 @@ def solve_ik(
         tol_m: Accept a sample when ``|e| <= tol_m`` [m].
         max_iter: Iteration limit per sample.
         damping: Initial damping factor (relative to ``|e|²``).
+        progress: A progress bar advanced by one per sample solved (optional).
 
     Returns:
         The :class:`IKSolution`.
@@ -108,6 +111,8 @@ def solve_ik(
         if norm > tol_m:
             raise IKNotConverged(k, pts_k, norm, q, tol_m)
         out_q[k], residual[k], iterations[k] = q, norm, it
+        if progress is not None:
+            progress.update()
     return IKSolution(_readonly(out_q), _readonly(residual), iterations)
 
 

@@ -78,6 +78,12 @@ var pinflexReady = pinflexUnpack("{commands}").then(function (commands) {{
       console.warn("pinflex: a scene command failed:", err);
     }}
   }}
+  requestAnimationFrame(function () {{
+    requestAnimationFrame(function () {{
+      console.info("pinflex: scene drawn " + Math.round(performance.now()) +
+                   " ms after the page started");
+    }});
+  }});
   var match = /[#&]t=([0-9.eE+-]+)/.exec(window.location.hash);
   if (match) {{
     viewer.animator.pause();

@@ -42,7 +42,12 @@ MASS_SPHERE_DENSITY = 2000.0
 
 
 def load_visual_model(model: FlexibleModel) -> pin.GeometryModel | None:
-    """Visual geometry of the URDF, or ``None`` (with a warning) when it cannot be loaded."""
+    """Visual geometry of the URDF, or ``None`` (with a warning) when it cannot be loaded.
+
+    Raises:
+        UnsafePath: A mesh lies outside the description's folder and the package roots
+            (allowed by loading it with ``allow_paths=True``).
+    """
     desc = model.description
     dirs = [str(desc.base_dir)] if desc.base_dir is not None else []
     try:
@@ -51,10 +56,15 @@ def load_visual_model(model: FlexibleModel) -> pin.GeometryModel | None:
         dirs.append(str(robot_data_dir().parent.parent))
     except InvalidDescription:
         pass
+    from pinflex.description.crosscheck import native_stderr
+    from pinflex.description.source import check_mesh_paths
+
+    check_mesh_paths(desc.urdf_xml, desc.base_dir, dirs, allow=desc.allow_paths)
     try:
-        return pin.buildGeomFromUrdfString(
-            model.model, desc.urdf_xml, pin.GeometryType.VISUAL, package_dirs=dirs
-        )
+        with native_stderr():  # urdfdom and assimp messages stay off the terminal
+            return pin.buildGeomFromUrdfString(
+                model.model, desc.urdf_xml, pin.GeometryType.VISUAL, package_dirs=dirs
+            )
     except (RuntimeError, ValueError) as exc:
         warnings.warn(
             f"the URDF's visual geometry could not be loaded ({exc}); drawing simple shapes",

@@ -6,10 +6,15 @@ closes, so after a few hundred (interrupted) page loads the pipe buffer is full,
 blocks on ``print`` and the viewer freezes. It is also started in its own session and only
 killed by an ``atexit`` hook, so a SIGTERM (or SIGKILL) of the parent leaves it orphaned.
 
-:class:`MeshcatServer` starts the same server (``python -m meshcat.servers.zmqserver``) with
-its output drained by a daemon thread (the last lines are kept for error messages), and stops
-it: on :meth:`close`, at interpreter exit, on SIGTERM (a handler is installed when the main
-thread has none), and on Linux also when the parent dies for any reason (``PR_SET_PDEATHSIG``).
+:class:`MeshcatServer` starts the same server, listening on ``127.0.0.1`` only and with a
+bounded set of websockets (:mod:`pinflex.visualization.meshcat_server`; meshcat's own binds
+every network interface and keeps dropped connections), with its output drained by a daemon
+thread (the last lines are kept for error messages), and stops it: on :meth:`close`, at
+interpreter exit, on SIGTERM (a handler is installed when the main thread has none), and on
+Linux also when the parent dies for any reason (``PR_SET_PDEATHSIG``).
+
+``bind="0.0.0.0"`` (``pinflex view --bind 0.0.0.0``) serves the scene to every machine that
+can reach this one: the viewer has no authentication, so do that only on a trusted network.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import subprocess
 import sys
 import threading
 import weakref
+from pathlib import Path
 
 from pinflex.exceptions import ViewerServerError
 
@@ -70,6 +76,8 @@ class MeshcatServer:
     Args:
         zmq_url: zmq address for the server to bind (default: meshcat picks a free port).
         timeout_s: How long to wait for the server to print its URLs [s].
+        bind: Address the web port listens on: ``"127.0.0.1"`` (default, this machine only),
+            or e.g. ``"0.0.0.0"`` for every interface (anyone on the network sees the scene).
 
     Attributes:
         zmq_url: Address of the server's zmq socket.
@@ -77,18 +85,34 @@ class MeshcatServer:
         process: The ``subprocess.Popen`` of the server.
     """
 
-    def __init__(self, zmq_url: str | None = None, timeout_s: float = 30.0):
+    def __init__(self, zmq_url: str | None = None, timeout_s: float = 30.0,
+                 bind: str = "127.0.0.1"):
         """Start the server and wait for its URLs.
 
         Args:
             zmq_url: zmq address for the server to bind (default: meshcat picks a free port).
             timeout_s: How long to wait for the server to print its URLs [s].
+            bind: Address the web port listens on (default ``127.0.0.1``).
 
         Raises:
             ViewerServerError: The server cannot start, exits at start-up, or prints no URL
                 within ``timeout_s``.
         """
-        args = [sys.executable, "-u", "-m", "meshcat.servers.zmqserver"]
+        if not isinstance(bind, str) or not bind or any(c.isspace() for c in bind):
+            raise ViewerServerError(f"bind address {bind!r} is not an address")
+        if bind != "localhost":
+            import ipaddress
+
+            try:  # an IP address of this machine; host names would be resolved (slowly)
+                ipaddress.ip_address(bind)
+            except ValueError:
+                raise ViewerServerError(
+                    f"bind address {bind!r} is not an IP address (give one such as "
+                    "127.0.0.1, 0.0.0.0 or ::, or 'localhost')") from None
+        # run by file name: the server process imports meshcat and tornado, not pinflex
+        script = str(Path(__file__).with_name("meshcat_server.py"))
+        args = [sys.executable, "-u", script, "--bind", bind]
+        self.bind = bind
         if zmq_url is not None:
             args += ["--zmq-url", zmq_url]
         self.tail: collections.deque[str] = collections.deque(maxlen=50)
@@ -174,15 +198,18 @@ class MeshcatServer:
         self.close()
 
 
-def served_visualizer(zmq_url: str | None = None):
+def served_visualizer(zmq_url: str | None = None, bind: str = "127.0.0.1"):
     """A ``meshcat.Visualizer`` on a local meshcat server; its URL is ``vis.url()``.
 
     With ``zmq_url`` it connects to a server that is already running; otherwise it starts a
-    :class:`MeshcatServer` (drained output, stopped on exit and SIGTERM), available as
-    ``vis.window.pinflex_server``. No browser is opened.
+    :class:`MeshcatServer` (listening on ``bind``, drained output, stopped on exit and
+    SIGTERM), available as ``vis.window.pinflex_server``. No browser is opened.
 
     Args:
         zmq_url: zmq address of a running meshcat server, or None to start one.
+        bind: Address the new server's web port listens on (default ``127.0.0.1``, this
+            machine only; ``"0.0.0.0"`` serves every network interface, without
+            authentication).
 
     Returns:
         A ``meshcat.Visualizer``.
@@ -196,7 +223,7 @@ def served_visualizer(zmq_url: str | None = None):
     meshcat = require_meshcat()
     if zmq_url is not None:
         return meshcat.Visualizer(zmq_url=zmq_url)
-    server = MeshcatServer()
+    server = MeshcatServer(bind=bind)
     import io
     from contextlib import redirect_stdout
 
