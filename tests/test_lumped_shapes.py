@@ -102,7 +102,7 @@ def test_close_bending_planes_on_the_z1_pair_by_shape():
 
     The test pairs the modes itself from the MAC of the two models' node translations. Paired
     by order (``pair_by_shape=False``), the fit names a pair that is not the same mode exactly
-    when the test's pairing finds one (with the shipped overlay: locked modes 3 and 4, 203.4
+    when the test's pairing finds one (with the tubes alone: locked modes 3 and 4, 203.4
     and 206.6 Hz, one link's two bending planes, crosswise). Paired by shape (the default),
     every pair is its own mode and the frequencies are within the fit's stated error.
     """
