@@ -16,25 +16,15 @@ import pytest
 import scipy.integrate
 
 from pinflex import FlexibleModel, beam
+from pinflex.cases.spin_up import KANE_URDF, SPIN_UP_S
 from pinflex.dynamics import ErlsDynamics, simulate_prescribed
 from pinflex.dynamics.modes import modes_at_speed
 from pinflex.dynamics.motion import JointMotion
 from pinflex.exceptions import ModelValidityError, ModelValidityWarning
 
-#: Kane, Ryan and Banerjee (1987): L = 10 m, EI = 1.4e4 N m², ρA = 1.2 kg/m (EA = 1.4e7 N).
-KANE = """<?xml version="1.0"?>
-<robot name="kane" xmlns:pinflex="urn:pinflex:urdf:1">
-  <link name="base"/><link name="beam"/>
-  <joint name="hub" type="revolute"><parent link="base"/><child link="beam"/>
-    <origin xyz="0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-1e4" upper="1e4" effort="1" velocity="100"/></joint>
-  <pinflex:flexible link="beam" elements="10" normal="0 0 1" tip="10 0 0">
-    <pinflex:material E="7e10" linear_density="1.2"/>
-    <pinflex:section A="2e-4" Iy="2e-7" Iz="2e-7" J="4e-7"/>
-  </pinflex:flexible>
-</robot>
-"""
-TS = 15.0
+#: Kane, Ryan and Banerjee (1987): L = 10 m, EI = 1.4e4 N m², ρA = 1.2 kg/m (EA = 1.4e7 N);
+#: the model under test, as the package ships it (the references below do not use it).
+KANE, TS = KANE_URDF, SPIN_UP_S
 OMEGA1 = 1.875104068711961**2 * math.sqrt(1.4e4 / (1.2 * 10.0**4))  # cantilever, rad/s
 
 
