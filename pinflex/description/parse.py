@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from pinflex import beam
-from pinflex.description.checks import check_annotations, check_physical, check_urdf
+from pinflex.description.checks import check_annotations, check_physical
 from pinflex.description.overlay import apply_overlay, resolve_base
 from pinflex.description.params import Resolver, parse_parameters
 from pinflex.description.schema import MAX_ELEMENTS_PER_LINK, Checked, attribute_unit
@@ -26,6 +26,7 @@ from pinflex.description.types import (
     RigidInertia,
     RobotDescription,
 )
+from pinflex.description.urdf_checks import check_urdf
 from pinflex.exceptions import (
     InvalidBeamProperty,
     InvalidDescription,

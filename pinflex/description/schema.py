@@ -37,7 +37,7 @@ Parsing the values into dataclasses stays in :mod:`pinflex.description.parse`, w
 after these checks and can trust the attributes it reads.
 
 The checks that walk a document against this table live in
-:mod:`pinflex.description.checks`.
+:mod:`pinflex.description.checks` (the plain URDF around: :mod:`pinflex.description.urdf_checks`).
 """
 
 from __future__ import annotations

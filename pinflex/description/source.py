@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
 
+from pinflex.description.types import NAMESPACE
 from pinflex.exceptions import InvalidDescription, PinflexError, UnreadableFile
 
 #: Largest description file read [bytes]; URDFs are a few hundred kB at most.
@@ -225,3 +226,19 @@ def parse_xml(text: str, source: str = "<string>") -> XmlDocument:
         ) from None
     root = builder.close()
     return XmlDocument(root=root, source=source, lines=doc_lines, prefixes=prefixes)
+
+
+def local_name(tag: str) -> tuple[str, str]:
+    """``(namespace URI, local name)`` of an ElementTree tag or attribute key."""
+    if tag.startswith("{"):
+        ns, _, local = tag[1:].partition("}")
+        return ns, local
+    return "", tag
+
+
+def element_label(el) -> str:
+    """An element as messages name it: ``<pinflex:flexible>`` or ``<joint>`` ("" for None)."""
+    if el is None:
+        return ""
+    ns, local = local_name(el.tag)
+    return f"<pinflex:{local}>" if ns == NAMESPACE else f"<{local}>"
