@@ -28,6 +28,9 @@ candidate; if none was confirmed, the best candidate with ``confirmed=False`` an
 word whether the exact model meets everything (:mod:`pinflex.assignment.result`); the command
 line exits with 3 when it does not.
 
+The loop's pieces (candidates checked on the exact model, trust region, restoration,
+floor shifts, re-expansion) are in :mod:`pinflex.assignment.candidates`.
+
 Mode identity: a target "mode i" is mode i at the expansion point, followed by shape along the
 design change and the trajectory (:mod:`pinflex.assignment.verify`, :mod:`pinflex.erls.tracking`);
 ``max_error_*`` are the errors of those tracked modes, ``max_error_*_sorted`` those of the
@@ -47,27 +50,28 @@ vs 2.69 % over y ∈ [0, 0.25]², ``benchmarks/bench_taylor.py``); ``quantity="e
 
 from __future__ import annotations
 
-import dataclasses
 import time
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.assignment.build import budget_mass, build_assignment, design_region, predicted_hz
-from pinflex.assignment.floors import (
-    FLOOR_RTOL,
-    corrected_floors,
-    floors_on_exact,
-    violation,
+from pinflex.assignment.build import build_assignment, design_region
+from pinflex.assignment.candidates import (
+    Candidate,
+    ExactCheck,
+    choose,
+    design_from,
+    hold_floors,
+    reexpand,
+    restoration,
+    trust_box,
 )
-from pinflex.assignment.points import PiecewiseTaylor
-from pinflex.assignment.problem import AssignmentQP, QPSolution
+from pinflex.assignment.floors import FLOOR_RTOL, floors_on_exact
 from pinflex.assignment.result import AssignmentResult, outcome
 from pinflex.assignment.solve import solve_assignment_qp
 from pinflex.assignment.targets import Target, check_trajectory_limits, target_matrix
-from pinflex.assignment.verify import Verification, floor_margins, verify_tracked
+from pinflex.assignment.verify import Verification, floor_margins
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import (
     AssignmentInfeasible,
@@ -78,7 +82,6 @@ from pinflex.exceptions import (
     ModeCrossingWarning,
     PredictionNotConfirmed,
 )
-from pinflex.parametric import TaylorModel
 from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory
 from pinflex.trajectory.samples import in_model_order
@@ -132,82 +135,6 @@ def exact_errors(model: FlexibleModel, Q: np.ndarray, y: np.ndarray,
     cols = [list(modes).index(t.mode) for t in targets]
     err = np.abs(f[:, cols].T / tgt - 1.0)
     return f, float(err.max())
-
-
-@dataclass(frozen=True)
-class _Candidate:
-    """One QP answer checked on the exact model."""
-
-    y: np.ndarray
-    taylor: TaylorModel | PiecewiseTaylor
-    problem: AssignmentQP | None
-    solution: QPSolution | None
-    exact: Verification
-    predicted: np.ndarray | None  # (ns, len(vmodes)) [Hz]
-    gap: float
-    cost: float
-    viol: float
-    floors_model: str = ""
-
-    def better_than(self, other: _Candidate) -> bool:
-        """Feasibility first (relative violation), then the exact cost."""
-        if self.viol > FLOOR_RTOL or other.viol > FLOOR_RTOL:
-            return self.viol < other.viol * (1 - 1e-9)
-        return self.cost < other.cost - 1e-12 * abs(other.cost)
-
-
-class _Checker:
-    """What every candidate is measured by: exact tracked frequencies, gap, cost, violation."""
-
-    def __init__(self, model, Q, trajectory, targets, vmodes, reference, build_kwargs):
-        self.model, self.Q, self.vmodes, self.reference = model, Q, list(vmodes), reference
-        self.tgt = target_matrix(targets, Q.shape[0])
-        self.tmodes = [t.mode for t in targets]
-        self.weights = np.array([t.weight for t in targets], dtype=float)
-        self.omega = trajectory.trapezoid_weights()
-        self.quantity = build_kwargs.get("quantity", "freq_hz")
-        self.floors = list(build_kwargs.get("floors", ()))
-        self.bands = list(build_kwargs.get("bands", ()))
-        self.budget = build_kwargs.get("mass_budget_kg")
-        self.didx: list[int] = list(range(model.ny))
-        self.checked = sorted({*self.tmodes, *(int(f[0]) for f in self.floors),
-                               *(int(b[0]) for b in self.bands)})
-
-    def verify(self, y) -> Verification:
-        return verify_tracked(self.model, self.Q, y, self.tgt, self.tmodes, self.vmodes,
-                              self.reference)
-
-    def by_mode(self, v: Verification) -> dict[int, np.ndarray]:
-        return {m: v.freq_hz[:, k] for k, m in enumerate(self.vmodes)}
-
-    def cost(self, v: Verification) -> float:
-        """The QP's cost (10) with the exact tracked frequencies."""
-        cols = [self.vmodes.index(m) for m in self.tmodes]
-        f = v.freq_hz[:, cols].T
-        if self.quantity == "eigval":
-            f, t = (2 * np.pi * f) ** 2, (2 * np.pi * self.tgt) ** 2
-        else:
-            t = self.tgt
-        return float(0.5 * np.sum(self.weights[:, None] * self.omega[None, :] * (f - t) ** 2))
-
-    def evaluate(self, y, taylor, problem, solution, floors_model="",
-                 exact: Verification | None = None) -> _Candidate:
-        v = self.verify(y) if exact is None else exact
-        pred = None if taylor is None else predicted_hz(taylor, self.Q, y, self.vmodes,
-                                                        self.quantity)
-        gap = 0.0 if pred is None else self.gap(pred, v)
-        mass = None
-        if self.budget is not None:
-            mass = budget_mass(self.model, y, self.didx)
-        viol = violation(self.by_mode(v), self.floors, self.bands, mass, self.budget)
-        return _Candidate(np.asarray(y, dtype=float), taylor, problem, solution, v, pred, gap,
-                          self.cost(v), viol, floors_model)
-
-    def gap(self, pred: np.ndarray, v: Verification) -> float:
-        cols = [self.vmodes.index(m) for m in self.checked]
-        p, e = pred[:, cols], v.freq_hz[:, cols]
-        ok = np.isfinite(p)
-        return float(np.max(np.abs(p[ok] / e[ok] - 1.0))) if ok.any() else 0.0
 
 
 def assign_frequencies(
@@ -302,7 +229,7 @@ def assign_frequencies(
     stage("expansion_and_build", t0)
     bar.update()
     reference = (taylor.q0, taylor.y0)
-    check = _Checker(model, Q, trajectory, targets, vmodes, reference, build_kwargs)
+    check = ExactCheck(model, Q, trajectory, targets, vmodes, reference, build_kwargs)
     check.didx = list(taylor.design_idx)
     t0 = now()
     if freq_before_hz is None:
@@ -339,9 +266,9 @@ def assign_frequencies(
     stage("qp", t0)
     bar.update()
     t0 = now()
-    cand = check.evaluate(_design_from(model, taylor, solution.dy), taylor, problem, solution,
+    cand = check.evaluate(design_from(model, taylor, solution.dy), taylor, problem, solution,
                           floors_model)
-    cand = _hold_floors(check, cand, rebuild)
+    cand = hold_floors(check, cand, rebuild)
     stage("exact_verification", t0)
     bar.update()
 
@@ -350,9 +277,9 @@ def assign_frequencies(
     lo = np.array([model.design[j].lower for j in didx])
     hi = np.array([model.design[j].upper for j in didx])
     span = np.where(np.isfinite(hi - lo), hi - lo, np.maximum(np.abs(taylor.y0[didx]), 1.0))
-    current: _Candidate | None = None  # checked on the exact model only when needed
+    current: Candidate | None = None  # checked on the exact model only when needed
     history: list[dict] = []
-    seen: list[_Candidate] = []
+    seen: list[Candidate] = []
     radius = None  # trust radius as a fraction of each variable's range; None: the whole box
     refinements = 0
     solves_left = 3 * (max_refinements + 1) + 10  # accepted steps plus trust-region halvings
@@ -385,7 +312,7 @@ def assign_frequencies(
             if refinements >= max_refinements:
                 break
             t0 = now()
-            problem, taylor = _reexpand(model, trajectory, targets, build_kwargs, check,
+            problem, taylor = reexpand(model, trajectory, targets, build_kwargs, check,
                                         current, taylor.q0, rebuild)
             stage("refinement", t0)
             refinements += 1
@@ -397,11 +324,11 @@ def assign_frequencies(
         if solves_left <= 0:
             break
         t0 = now()
-        box = problem if radius is None else _trust(problem, radius * span)
+        box = problem if radius is None else trust_box(problem, radius * span)
         try:
             solution = solve_assignment_qp(box)
         except AssignmentInfeasible:
-            restored = _restoration(box)  # floors out of reach here: the closest approach
+            restored = restoration(box)  # floors out of reach here: the closest approach
             if restored is None:
                 break
             box = restored
@@ -409,13 +336,13 @@ def assign_frequencies(
                 solution = solve_assignment_qp(box)
             except AssignmentInfeasible:
                 break
-        cand = check.evaluate(_design_from(model, taylor, solution.dy), taylor, box, solution,
+        cand = check.evaluate(design_from(model, taylor, solution.dy), taylor, box, solution,
                               "taylor+exact" if floors and refinements else floors_model)
-        cand = _hold_floors(check, cand, rebuild, trust=None if radius is None else
+        cand = hold_floors(check, cand, rebuild, trust=None if radius is None else
                             radius * span)
         stage("refinement", t0)
         bar.update()
-    answer = _choose(seen, confirm_tol)
+    answer = choose(seen, confirm_tol)
     margin = (floor_margins(model, Q, answer.y, floors, reference) if floors else None)
     bar.total = bar.done
     bar.close()
@@ -517,109 +444,6 @@ def _motion_validity(model, trajectory, Q, after):
     return validity(model, times, Q, qd, qdd, w1, what="the trajectory", basis="model")
 
 
-def _choose(seen: list[_Candidate], confirm_tol: float) -> _Candidate:
-    """The best confirmed candidate (feasibility, then cost); else the best of all."""
-    confirmed = [c for c in seen if c.gap <= confirm_tol]
-    pool = confirmed or seen
-    best = pool[0]
-    for c in pool[1:]:
-        if c.better_than(best):
-            best = c
-    return best
-
-
-def _trust(problem: AssignmentQP, rho: np.ndarray) -> AssignmentQP:
-    """The QP with its box cut to ``|δy| <= rho``."""
-    return dataclasses.replace(problem, lower=np.maximum(problem.lower, -rho),
-                               upper=np.minimum(problem.upper, rho))
-
-
-def _restoration(problem: AssignmentQP) -> AssignmentQP | None:
-    """The QP with its floor rows lowered by the least shortfall the polynomial can reach.
-
-    When no step in the (trust) box meets the floors on the polynomial, the step that comes
-    closest is wanted (a feasibility-restoration step): the linear program ``max t`` subject
-    to ``floor rows − t >= l`` and the other rows finds the shortfall ``t* < 0``, and the
-    floor rows are lowered by it. None when the other rows alone are infeasible.
-    """
-    from scipy.optimize import linprog
-
-    groups = np.array(problem.constraint_groups)
-    floor = groups == "floor"
-    if not floor.any():
-        return None
-    ny = problem.ny
-    scale = np.max(np.abs(problem.C[floor]), axis=1)
-    scale = np.where(scale > 0, scale, 1.0)
-    rows, rhs = [], []
-    Cf, lf = problem.C[floor] / scale[:, None], problem.l[floor] / scale
-    rows.append(np.hstack([-Cf, np.ones((Cf.shape[0], 1))]))  # t - C dy <= -l
-    rhs.append(-lf)
-    other = ~floor
-    Co, lo, uo = problem.C[other], problem.l[other], problem.u[other]
-    for sign, bound in ((1.0, uo), (-1.0, lo)):
-        ok = np.isfinite(bound)
-        if ok.any():
-            rows.append(np.hstack([sign * Co[ok], np.zeros((ok.sum(), 1))]))
-            rhs.append(sign * bound[ok])
-    bounds = [(None if not np.isfinite(a) else a, None if not np.isfinite(b) else b)
-              for a, b in zip(problem.lower, problem.upper)] + [(None, 0.0)]
-    A_eq = np.hstack([problem.A, np.zeros((problem.A.shape[0], 1))]) if problem.A.size else None
-    out = linprog(np.r_[np.zeros(ny), -1.0], A_ub=np.vstack(rows), b_ub=np.concatenate(rhs),
-                  A_eq=A_eq, b_eq=problem.b if problem.A.size else None, bounds=bounds,
-                  method="highs")
-    if out.status != 0:
-        return None
-    shortfall = float(out.x[-1])
-    lowered = problem.l.copy()
-    lowered[floor] += (shortfall - 1e-9 * max(1.0, abs(shortfall))) * scale
-    return dataclasses.replace(problem, l=lowered)
-
-
-def _reexpand(model, trajectory, targets, build_kwargs, check: _Checker, at: _Candidate, q0,
-              rebuild):
-    """Expand again at an accepted design; floors shifted to the exact values there."""
-    _, tm = build_assignment(model, trajectory, targets,
-                             **dict(build_kwargs, y0=at.y, q0=q0, taylor=None))
-    rows = list(build_kwargs.get("floors", ()))
-    if rows:
-        rows = corrected_floors(model, check.Q, tm, at.y, rows, check.quantity,
-                                check.reference, exact_hz=check.by_mode(at.exact))
-    return rebuild(rows, tm, y0=at.y, q0=q0)
-
-
-def _hold_floors(check: _Checker, cand: _Candidate, rebuild, trust=None) -> _Candidate:
-    """Shift floor rows by the exact-minus-predicted offsets at a candidate that breaks them.
-
-    The polynomial meets the floors but the exact model does not: the floors are shifted so
-    that the same Taylor model is exact at the candidate (plus a hair of margin) and the QP
-    solved again, at most six times, while the exact violation shrinks.
-    """
-    if not check.floors or cand.viol <= FLOOR_RTOL or cand.taylor is None:
-        return cand
-    best = cand
-    for _ in range(6):
-        rows = [(m, np.asarray(f) + 1e-6 * np.abs(np.asarray(f)))
-                for m, f in corrected_floors(check.model, check.Q, cand.taylor, best.y,
-                                             check.floors, check.quantity, check.reference,
-                                             exact_hz=check.by_mode(best.exact))]
-        problem, tm = rebuild(rows, cand.taylor)
-        if trust is not None:
-            problem = _trust(problem, trust)
-        try:
-            solution = solve_assignment_qp(problem)
-        except AssignmentInfeasible:
-            break
-        new = check.evaluate(_design_from(check.model, tm, solution.dy), tm, problem, solution,
-                             "taylor+exact")
-        if not new.viol < best.viol:
-            break
-        best = new
-        if new.viol <= FLOOR_RTOL:
-            break
-    return best
-
-
 def _refusal(exc: AssignmentInfeasible, problem) -> AssignmentInfeasible:
     """The QP's refusal, saying which model refused it."""
     groups = set(problem.constraint_groups)
@@ -684,10 +508,3 @@ def _warn_outcome(model, y, before, after, events, target_modes, predicted, marg
         )
 
 
-def _design_from(model: FlexibleModel, taylor: TaylorModel | PiecewiseTaylor, dy: np.ndarray
-                 ) -> np.ndarray:
-    y = taylor.y0.copy()
-    y[list(taylor.design_idx)] += dy
-    lo = np.array([d.lower for d in model.design])
-    hi = np.array([d.upper for d in model.design])
-    return np.clip(y, lo, hi)  # the QP keeps the box to 1e-10; clip round-off only
