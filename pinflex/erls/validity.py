@@ -107,6 +107,17 @@ class Validity:
                 "definition": "max over samples of |omega_link|^2/omega_i^2 and "
                               "|alpha_link|/omega_i^2 (pinflex.erls.validity)"}
 
+    def to_dict(self) -> dict:
+        """:meth:`summary` plus the per-sample ratios of mode 1 (``times_s``,
+        ``speed_ratio``, ``accel_ratio``; None where a frequency was not positive)."""
+
+        def clean(a):
+            return [float(x) if np.isfinite(x) else None for x in np.asarray(a, dtype=float)]
+
+        return {**self.summary(), "times_s": clean(self.times_s),
+                "speed_ratio": clean(self.speed_ratio[:, 0]),
+                "accel_ratio": clean(self.accel_ratio[:, 0])}
+
     def write_csv(self, path) -> Path:
         """One row per sample: time, link rates and both ratios per mode.
 
@@ -131,6 +142,75 @@ class Validity:
         p = Path(path)
         write_text(p, "\n".join(lines) + "\n", "validity CSV")
         return p
+
+
+def draw_validity(ax, v: Validity, *, label: str = "", color=None,
+                  threshold: bool = True) -> dict:
+    """Draw both ratios of mode 1 against time on ``ax`` (log scale), with the threshold.
+
+    The one drawing of the indicator on every chart (simulation, modes along a motion,
+    assignment): ``|ω_L|²/ω₁²`` solid, ``|α_L|/ω₁²`` dashed, the threshold dotted. Ratios
+    below 1e-12 are drawn at 1e-12 (a motion at rest has zeros on a log axis).
+
+    Args:
+        ax: A matplotlib Axes.
+        v: The :class:`Validity`.
+        label: Prefix of the legend entries (e.g. a design name).
+        color: Line colour (default: the axes' next one).
+        threshold: Draw the threshold line (once per axes).
+
+    Returns:
+        The arrays drawn: ``times_s``, ``speed_ratio``, ``accel_ratio`` (mode 1, as in
+        :meth:`Validity.write_csv` and the tables) and ``threshold``.
+    """
+    pre = f"{label}: " if label else ""
+    speed = np.asarray(v.speed_ratio[:, 0], dtype=float)
+    accel = np.asarray(v.accel_ratio[:, 0], dtype=float)
+    line, = ax.semilogy(v.times_s, np.maximum(np.nan_to_num(speed), 1e-12), lw=1.0,
+                        color=color, label=f"{pre}|ω|²/ω₁²")
+    ax.semilogy(v.times_s, np.maximum(np.nan_to_num(accel), 1e-12), lw=1.0, ls="--",
+                color=line.get_color(), label=f"{pre}|α|/ω₁²")
+    if threshold:
+        ax.axhline(v.threshold, color="k", lw=0.9, ls=":", label=f"threshold {v.threshold:g}")
+        top = max(v.threshold, v.indicator)
+        ax.set_ylim(bottom=1e-5 * top, top=3.0 * top)
+    ax.grid(alpha=0.3, which="both")
+    return {"times_s": np.asarray(v.times_s, dtype=float), "speed_ratio": speed,
+            "accel_ratio": accel, "threshold": float(v.threshold)}
+
+
+def figure_with_validity(validity: Validity | None, width: float, height: float,
+                         panels: int = 1, dpi: int = 110):
+    """A Figure of ``panels`` stacked panels sharing time, plus the indicator's panel below.
+
+    Args:
+        validity: The :class:`Validity` to draw (:func:`draw_validity`), or None (no panel).
+        width: Figure width [in].
+        height: Height of the ``panels`` [in] (the indicator's panel adds 1.8 in).
+        panels: Number of panels above the indicator.
+        dpi: Resolution.
+
+    Returns:
+        ``(fig, axes, low)``: the Figure (on its own Agg canvas: pyplot is left alone), the list
+        of the upper axes and the indicator's axes (None without ``validity``); the lowest
+        panel carries the time label.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height + (1.8 if validity is not None else 0.0)), dpi=dpi)
+    FigureCanvasAgg(fig)
+    n = panels + (validity is not None)
+    ratios = [2.2] * panels + ([1.0] if validity is not None else [])
+    axes = list(fig.subplots(n, 1, sharex=True, squeeze=False, height_ratios=ratios)[:, 0])
+    low = None
+    if validity is not None:
+        low = axes.pop()
+        draw_validity(low, validity)
+        low.set_ylabel("eq. (1) validity", fontsize=8)
+        low.legend(fontsize=6, loc="best")
+    (low or axes[-1]).set_xlabel("time [s]")
+    return fig, axes, low
 
 
 def _max(a: np.ndarray) -> float:
