@@ -257,3 +257,37 @@ def test_assignment_charts_draw_the_validity_of_the_assignment_csv(tmp_path):
         assert list(lines[2].get_ydata()) == [0.1, 0.1]
     paths = assignment_charts(res, traj.times_s, tmp_path / "charts", data)
     assert [p.name for p in paths] == ["mode1_assignment.png", "other_modes.png"]
+
+
+def test_export_along_a_trajectory_with_the_motions_rates_is_the_prescribed_simulations(
+        kane_path, tmp_path, capsys):
+    """`export --trajectory --terms full --rates motion`: at every sample the exported A and
+    drive are the prescribed simulation's state equation (the same rest-to-rest spline) to
+    1e-12; `modes --rates motion` gives modes_at_speed_along's frequencies; --rates alone is
+    refused."""
+    from pinflex.dynamics.motion import JointMotion
+
+    t = np.linspace(0.0, 2.0, 17)
+    s = t / 2.0
+    traj = _write_csv(tmp_path / "move.csv", t, 1.2 * s**3 * (10 - 15 * s + 6 * s * s))
+    arm = FlexibleModel(kane_path, planar=True, joints="locked")
+    common = [str(kane_path), "--planar", "--joints", "locked", "--trajectory", str(traj)]
+    assert main(["export", *common, "--terms", "full", "--rates", "motion", "--out",
+                 str(tmp_path / "m.npz")]) == 0
+    data = np.load(tmp_path / "m.npz")
+    assert data["A"].shape == (t.size, 2 * arm.nx, 2 * arm.nx)
+    trajectory = Trajectory.from_csv(traj, joint_names=arm.joint_names)
+    system = PrescribedSystem(ErlsDynamics(arm), JointMotion(trajectory), terms="full")
+    for i in (1, 8, 13):
+        Abar, bbar = system.state_matrix(system.coefficients(t[i]))
+        assert np.abs(data["A"][i] - Abar).max() <= 1e-12 * np.abs(Abar).max()
+        assert np.abs(data["drive"][i] - bbar).max() <= 1e-12 * np.abs(bbar).max()
+    capsys.readouterr()
+    assert main(["modes", *common, "--at-speed", "--rates", "motion", "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    ref = modes_at_speed_along(ErlsDynamics(arm), trajectory)
+    assert js["rates"] == "motion"
+    assert np.array_equal(np.array(js["frequencies_hz"]), ref.freq_hz)
+    assert main(["modes", *common, "--rates", "motion"]) == 2
+    assert main(["export", *common, "--rates", "motion", "--out", str(tmp_path / "x.npz")]) == 2
+    assert "--rates" in capsys.readouterr().err

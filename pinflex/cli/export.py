@@ -49,6 +49,12 @@ def add_parser(sub) -> None:
                    "the default with --qd/--qdd) or with the centrifugal, Euler and "
                    "geometric-stiffness terms (full); see docs/exports.md")
     p.add_argument("--at-speed", action="store_true", help="the same as --terms full")
+    p.add_argument("--rates", choices=("samples", "motion"), default="samples",
+                   help="with --trajectory and --terms: joint velocities and accelerations by "
+                   "second-order finite differences of the samples (samples, default) or from "
+                   "the rest-to-rest quintic spline through them that pinflex simulate drives "
+                   "(motion: the exported model is then the prescribed simulation's at each "
+                   "sample)")
     p.add_argument("--out", required=True,
                    help="output file: .npz or .mat (linear model), .xml (MJCF), .urdf")
     p.add_argument("--format", choices=("linear", "mjcf", "urdf"),
@@ -63,24 +69,25 @@ def cmd_export(args: argparse.Namespace) -> int:
     """Run ``pinflex export``."""
     from pinflex.cli import export_lumped
 
-    fmt = export_lumped.format_of(args)
-    if fmt in export_lumped.LUMPED_FORMATS:
-        if args.qd is not None or args.qdd is not None or args.terms or args.at_speed:
-            from pinflex.exceptions import ConfigurationError
+    from pinflex.exceptions import ConfigurationError
 
-            raise ConfigurationError("--qd, --qdd, --terms and --at-speed give the linear "
-                                     "model (.npz or .mat) about a moving state, not a lumped "
-                                     "model")
+    fmt = export_lumped.format_of(args)
+    terms = speed_terms(args)
+    moving = terms is not None or args.qd is not None or args.qdd is not None
+    if fmt in export_lumped.LUMPED_FORMATS:
+        if moving or args.rates != "samples":
+            raise ConfigurationError("--qd, --qdd, --terms, --at-speed and --rates give the "
+                                     "linear model (.npz or .mat) about a moving state, not a "
+                                     "lumped model")
         return export_lumped.run(args, fmt)
     from pinflex.erls import FlexibleModel
     from pinflex.native.export import linear_model, save_linear_model
 
-    from pinflex.exceptions import ConfigurationError
-
+    if args.rates != "samples" and not (moving and args.trajectory):
+        raise ConfigurationError("--rates gives the joint rates of the samples' moving states: "
+                                 "give it with --trajectory and --terms")
     model = FlexibleModel(robot_description(args), planar=args.planar,
                           values=parse_values(args.set), joints=args.joints)
-    terms = speed_terms(args)
-    moving = terms is not None or args.qd is not None or args.qdd is not None
     times = qd = qdd = None
     if args.trajectory:
         from pinflex.erls.along import trajectory_for
@@ -92,7 +99,12 @@ def cmd_export(args: argparse.Namespace) -> int:
         traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
         q = trajectory_for(model, traj)
         times = traj.times_s
-        if moving:
+        if moving and args.rates == "motion":
+            from pinflex.dynamics.motion import JointMotion
+            from pinflex.trajectory.samples import in_model_order
+
+            q, qd, qdd = JointMotion(in_model_order(model, traj)).sample(times)
+        elif moving:
             from pinflex.erls.validity import sample_rates
 
             if times.size < 3:

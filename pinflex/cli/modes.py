@@ -36,6 +36,11 @@ def add_parser(sub) -> None:
                    "terms only (eq1) or with the centrifugal, Euler and geometric-stiffness "
                    "terms (full); without it: the modes of the arm frozen at each pose")
     p.add_argument("--at-speed", action="store_true", help="the same as --terms full")
+    p.add_argument("--rates", choices=("samples", "motion"), default="samples",
+                   help="with --terms: joint velocities and accelerations by second-order "
+                   "finite differences of the samples (samples, default) or from the "
+                   "rest-to-rest quintic spline through them that pinflex simulate drives "
+                   "(motion)")
     p.add_argument("--gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
                    help="with --terms full: gravity [m/s^2] in world axes, whose axial loads "
                    "stiffen or soften the beams (default none)")
@@ -209,6 +214,11 @@ def _along(model, args: argparse.Namespace) -> int:
                       enabled=not args.no_progress and sys.stderr.isatty())
     terms = speed_terms(args, args.gravity)
     res: Any
+    if terms is None and args.rates != "samples":
+        from pinflex.exceptions import ConfigurationError
+
+        raise ConfigurationError("--rates gives the joint rates of the modes at speed: give it "
+                                 "with --terms (the frozen-pose modes need no rates)")
     if terms is None:
         res = modes_along(model, traj, modes=args.modes or 3, progress=bar, strict=args.strict)
     else:
@@ -216,7 +226,7 @@ def _along(model, args: argparse.Namespace) -> int:
         from pinflex.dynamics.modes import modes_at_speed_along
 
         res = modes_at_speed_along(ErlsDynamics(model, gravity=args.gravity), traj,
-                                   terms=terms, n_modes=args.modes or 3, rates="samples",
+                                   terms=terms, n_modes=args.modes or 3, rates=args.rates,
                                    strict=args.strict, progress=bar)
     bar.close()
     if args.csv:

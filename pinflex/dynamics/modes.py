@@ -315,7 +315,11 @@ def modes_at_speed_along(dyn, trajectory, *, terms: str = "full", n_modes: int =
             raise ConfigurationError(f"rates='samples' needs at least 3 samples, got {t.size}")
         qd, qdd = sample_rates(t, q)
     else:
-        motion = trajectory if isinstance(trajectory, JointMotion) else JointMotion(trajectory)
+        if not isinstance(trajectory, JointMotion):
+            from pinflex.trajectory.samples import in_model_order
+
+            trajectory = JointMotion(in_model_order(dyn.model, trajectory))
+        motion = trajectory
         t = np.asarray(motion.trajectory.times_s if times is None else times, dtype=float)
         q, qd, qdd = motion.sample(t)
     k = max(1, min(int(n_modes), dyn.nx))
