@@ -291,3 +291,24 @@ def test_export_along_a_trajectory_with_the_motions_rates_is_the_prescribed_simu
     assert main(["modes", *common, "--rates", "motion"]) == 2
     assert main(["export", *common, "--rates", "motion", "--out", str(tmp_path / "x.npz")]) == 2
     assert "--rates" in capsys.readouterr().err
+
+
+def test_modes_at_speed_along_matches_trajectory_columns_by_name():
+    """A trajectory whose columns are in another order than the arm's joints gives the same
+    modes at speed (columns matched by name, both rate schemes)."""
+    from conftest import TWO_LINK
+
+    arm = FlexibleModel(TWO_LINK, planar=True)
+    dyn = ErlsDynamics(arm)
+    t = np.linspace(0.0, 1.0, 7)
+    q = np.stack([0.3 + 0.5 * t**3 * (10 - 15 * t + 6 * t * t), 2.0 - 0.8 * t * t], axis=1)
+    names = tuple(arm.joint_names)
+    ordered = Trajectory(t, q, names)
+    swapped = Trajectory(t, q[:, ::-1], names[::-1])
+    for rates in ("motion", "samples"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            a = modes_at_speed_along(dyn, ordered, rates=rates, n_modes=2)
+            b = modes_at_speed_along(dyn, swapped, rates=rates, n_modes=2)
+        assert np.array_equal(a.freq_hz, b.freq_hz) and np.array_equal(a.qd, b.qd)
+        assert not np.allclose(a.freq_hz[3], a.freq_hz[0])
