@@ -89,6 +89,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     model = FlexibleModel(robot_description(args), planar=args.planar,
                           values=parse_values(args.set), joints=args.joints)
     times = qd = qdd = None
+    rates_checked = False
     if args.trajectory:
         from pinflex.erls.along import trajectory_for
         from pinflex.trajectory import Trajectory
@@ -111,6 +112,7 @@ def cmd_export(args: argparse.Namespace) -> int:
                 raise ConfigurationError("--terms with --trajectory differentiates the samples: "
                                          f"give at least 3 samples, not {times.size}")
             qd, qdd = sample_rates(times, q)
+            rates_checked = True
     else:
         q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
         qd, qdd = args.qd, args.qdd
@@ -125,6 +127,12 @@ def cmd_export(args: argparse.Namespace) -> int:
                             torque_input=args.torque_input)
     if times is not None:
         data["times_s"] = np.asarray(times)
+    if rates_checked:  # finite-difference rates: are they good enough for the speed terms?
+        from pinflex.erls.validity import check_sample_rates, validity
+
+        w1 = 2.0 * np.pi * np.where(data["freq_hz"][:, 0] > 0.0, data["freq_hz"][:, 0], np.nan)
+        indicator = validity(model, times, q, qd, qdd, w1, warn=False, basis="at speed")
+        check_sample_rates(times, q, indicator)
     path = save_linear_model(data, args.out)
     shape = "x".join(str(s) for s in data["A"].shape)
     state = ""

@@ -133,6 +133,9 @@ class ModesAtSpeedAlong:
         rates: How ``qd``, ``qdd`` were obtained (:data:`RATES`).
         validity: The validity indicator of eq. (1) against these frequencies
             (:class:`pinflex.erls.validity.Validity`), or None.
+        rates_error: With ``rates="samples"``: the estimated relative errors of the
+            finite-difference rates and their effect on the speed terms
+            (:func:`pinflex.erls.validity.check_sample_rates`), else None.
     """
 
     times_s: np.ndarray
@@ -146,6 +149,7 @@ class ModesAtSpeedAlong:
     joint_names: tuple[str, ...] = ()
     rates: str = "motion"
     validity: Any = field(default=None, repr=False)
+    rates_error: dict | None = field(default=None, repr=False)
 
     def columns(self) -> list[str]:
         """CSV header: ``t``, joints, their rates, per mode frequency and growth, flags."""
@@ -201,6 +205,7 @@ class ModesAtSpeedAlong:
                          "end_hz": float(self.freq_hz[-1, c])}
                         for c in range(self.freq_hz.shape[1])],
             "validity": None if self.validity is None else self.validity.to_dict(),
+            "rates_error": self.rates_error,
         }
 
     def to_json(self) -> str:
@@ -271,7 +276,9 @@ def modes_at_speed_along(dyn, trajectory, *, terms: str = "full", n_modes: int =
       (:func:`pinflex.erls.validity.sample_rates`, ``numpy.gradient`` with second-order ends;
       exact for motions quadratic in time, e.g. a constant spin), the rates the validity
       indicator of :func:`pinflex.erls.along.modes_along` uses. A trajectory file holds
-      positions only; this is the scheme of ``pinflex modes --trajectory --terms``.
+      positions only; this is the scheme of ``pinflex modes --trajectory --terms``. A
+      :class:`~pinflex.exceptions.TrajectoryWarning` says when the samples are too coarse
+      for the speed terms (:func:`pinflex.erls.validity.check_sample_rates`).
 
     The validity indicator (:mod:`pinflex.erls.validity`) is computed against the lowest
     three frequencies at each sample; with ``terms="eq1"`` it warns above its threshold
@@ -295,7 +302,12 @@ def modes_at_speed_along(dyn, trajectory, *, terms: str = "full", n_modes: int =
         :class:`ModesAtSpeedAlong`.
     """
     from pinflex.dynamics.motion import JointMotion
-    from pinflex.erls.validity import VALIDITY_THRESHOLD, sample_rates, validity
+    from pinflex.erls.validity import (
+        VALIDITY_THRESHOLD,
+        check_sample_rates,
+        sample_rates,
+        validity,
+    )
     from pinflex.exceptions import ConfigurationError
 
     terms = check_terms(terms)
@@ -336,5 +348,6 @@ def modes_at_speed_along(dyn, trajectory, *, terms: str = "full", n_modes: int =
             dyn.model, t, q, qd, qdd, 2.0 * np.pi * freq[:, :3], strict=strict and terms == "eq1",
             warn=terms == "eq1", what="the trajectory", basis="at speed",
             threshold=VALIDITY_THRESHOLD if validity_threshold is None else validity_threshold)
+    rates_error = check_sample_rates(t, q, indicator) if rates == "samples" else None
     return ModesAtSpeedAlong(t, freq, growth, unstable, terms, np.asarray(q), np.asarray(qd),
-                             np.asarray(qdd), names, rates, indicator)
+                             np.asarray(qdd), names, rates, indicator, rates_error)

@@ -276,6 +276,80 @@ def sample_rates(times_s, q) -> tuple[np.ndarray, np.ndarray]:
     return qd, np.gradient(qd, t, axis=0, edge_order=2)
 
 
+#: Size of the speed terms' error from finite-difference rates, relative to the elastic
+#: forces, above which :func:`check_sample_rates` warns.
+RATES_TOLERANCE = 1e-2
+
+
+def sample_rates_error(times_s, q) -> tuple[float, float]:
+    """Estimated error of :func:`sample_rates`, relative to the peak rates.
+
+    ``|r_h − r_2h|`` at the samples shared with every other sample (Richardson with a
+    first-order factor: the accelerations are second-order accurate inside and first-order at
+    the ends; inside the estimate is about three times the error).
+
+    Args:
+        times_s: Sample times (n,) [s].
+        q: Joint samples (n, nv).
+
+    Returns:
+        ``(velocity, acceleration)`` errors, each the largest over the shared samples and the
+        joints relative to the largest rate of the samples (0 for a motion at rest; NaN for
+        fewer than 5 samples).
+    """
+    t = np.asarray(times_s, dtype=float)
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    if t.size < 5:
+        return float("nan"), float("nan")
+    qd, qdd = sample_rates(t, q)
+    qd2, qdd2 = sample_rates(t[::2], q[::2])
+    out = []
+    for fine, coarse in ((qd, qd2), (qdd, qdd2)):
+        peak = float(np.abs(fine).max())
+        out.append(float(np.abs(fine[::2] - coarse).max()) / peak if peak > 0 else 0.0)
+    return out[0], out[1]
+
+
+def check_sample_rates(times_s, q, indicator: Validity | None,
+                       what: str = "the trajectory") -> dict:
+    """Whether finite-difference rates are good enough for the speed terms; warn if not.
+
+    The speed terms are ``|ω_L|²/ω_i²`` and ``|α_L|/ω_i²`` of the elastic forces, so relative
+    rate errors ``e_v``, ``e_a`` (:func:`sample_rates_error`) change them by about
+    ``2 e_v · max |ω_L|²/ω_i² + e_a · max |α_L|/ω_i²`` of the elastic forces. Above
+    :data:`RATES_TOLERANCE` a :class:`~pinflex.exceptions.TrajectoryWarning` says so (resample
+    finer, or take the interpolated motion's rates).
+
+    Args:
+        times_s: Sample times (n,) [s].
+        q: Joint samples (n, nv).
+        indicator: The :class:`Validity` of the motion (None: the rate errors themselves are
+            compared with the tolerance).
+        what: Name of the motion in the message.
+
+    Returns:
+        ``{"velocity": e_v, "acceleration": e_a, "terms": the change of the terms}`` (None
+        where fewer than 5 samples leave nothing to compare).
+    """
+    from pinflex.exceptions import TrajectoryWarning
+
+    e_v, e_a = sample_rates_error(times_s, q)
+    if not np.isfinite(e_v):
+        return {"velocity": None, "acceleration": None, "terms": None}
+    if indicator is None:
+        effect = max(e_v, e_a)
+    else:
+        effect = 2.0 * e_v * indicator.max_speed_ratio + e_a * indicator.max_accel_ratio
+    if effect > RATES_TOLERANCE:
+        warnings.warn(
+            f"{what} is sampled too coarsely for its velocities and accelerations by finite "
+            f"differences (estimated errors {100 * e_v:.2g} % and {100 * e_a:.2g} % of their "
+            f"peaks): the speed terms change by about {effect:.2g} of the elastic forces; "
+            "resample it finer, or take the rates of the interpolated motion (rates='motion', "
+            "--rates motion)", TrajectoryWarning, stacklevel=2)
+    return {"velocity": e_v, "acceleration": e_a, "terms": effect}
+
+
 def validity(model, times_s, q, qd, qdd, omega_rad_s, *, threshold: float = VALIDITY_THRESHOLD,
              strict: bool = False, warn: bool = True, what: str = "the motion",
              basis: str = "locked") -> Validity:
