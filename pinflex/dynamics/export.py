@@ -86,13 +86,13 @@ def linear_model_at_state(arm, q, qd=None, qdd=None, *, y=None, terms: str = "eq
     from pinflex.native.export import linear_model
 
     terms = check_terms(terms)
-    Q = np.asarray(arm.check_q(q), dtype=float)
-    Qd, Qdd = _state(qd, "qd", Q.shape), _state(qdd, "qdd", Q.shape)
     g = None if gravity is None else np.asarray(gravity, dtype=float)
     if g is not None and (g.shape != (3,) or not np.all(np.isfinite(g))):
         raise ConfigurationError(f"gravity must be 3 finite numbers [m/s^2], got {gravity!r}")
     preload = g is not None and terms == "full" and bool(np.any(g))
-    rest = linear_model(arm, Q, y, zeta=zeta, rayleigh=rayleigh, torque_input=torque_input)
+    rest = linear_model(arm, q, y, zeta=zeta, rayleigh=rayleigh, torque_input=torque_input)
+    Q = np.asarray(rest["q"], dtype=float)  # checked (nv,) or (ns, nv), user convention
+    Qd, Qdd = _state(qd, "qd", Q.shape), _state(qdd, "qdd", Q.shape)
     if not _moving(Qd, Qdd) and not preload:
         return rest
     if arm.ndof != arm.nx:
