@@ -164,3 +164,46 @@ def tubes_alone(path):
     from pinflex.description import load
 
     return dataclasses.replace(load(path), bodies=())
+
+
+#: Hamza-Cherif and Houmat (24th ICAS Congress, 2004), Table 2: a rotating cantilever of
+#: slenderness ratio L √(A / I) = 70, no hub: dimensionless flapwise and chordwise frequencies
+#: ω √(ρA L⁴ / EI) at dimensionless speeds γ = Ω √(ρA L⁴ / EI).
+FLAPWISE = {2: 4.1373, 4: 5.5850, 6: 7.3603, 8: 9.2568, 10: 11.2023, 50: 51.0805}
+CHORDWISE = {2: 3.6195, 4: 3.888, 6: 4.2393, 8: 4.6105, 10: 4.97, 50: 7.3362}
+
+
+def table_close(value, ref):
+    """Within the table's last printed digit (half a unit) plus 2e-4 relative."""
+    digits = len(str(ref).split(".")[1])
+    return abs(value - ref) <= 0.5 * 10.0**-digits + 2e-4 * ref
+
+
+def rotating_cantilever(folder, urdf_text):
+    """The table's beam (square 10 mm aluminium bar, slenderness 70) on the hub of ``urdf_text``.
+
+    ``urdf_text`` is the spin-up beam's description (:data:`pinflex.cases.spin_up.KANE_URDF`).
+
+    Returns:
+        ``(chord, flap, T)``: an in-plane description of 40 elements (chordwise modes, axial
+        stretching and Coriolis coupling), a spatial one of 20 elements (flapwise modes) and
+        the time scale ``T = √(ρA L⁴ / EI)`` [s].
+    """
+    import math
+    from pathlib import Path
+
+    W = 0.01
+    A, inertia = W * W, W**4 / 12
+    L = 70.0 * math.sqrt(inertia / A)
+    E, rho = 70e9, 2700.0
+    text = urdf_text.replace(
+        '<pinflex:material E="7e10" linear_density="1.2"/>',
+        f'<pinflex:material E="{E}" G="{E / 2.6}" density="{rho}"/>').replace(
+        '<pinflex:section A="2e-4" Iy="2e-7" Iz="2e-7" J="4e-7"/>',
+        f'<pinflex:section shape="rectangle" width="{W}" height="{W}"/>')
+    chord, flap = Path(folder) / "chord.urdf", Path(folder) / "flap.urdf"
+    chord.write_text(text.replace('elements="10" normal="0 0 1" tip="10 0 0"',
+                                  f'elements="40" normal="0 0 1" tip="{L} 0 0"'))
+    flap.write_text(text.replace('elements="10" normal="0 0 1" tip="10 0 0"',
+                                 f'elements="20" tip="{L} 0 0"'))
+    return chord, flap, math.sqrt(rho * A * L**4 / (E * inertia))

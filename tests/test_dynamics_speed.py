@@ -14,6 +14,7 @@ import warnings
 import numpy as np
 import pytest
 import scipy.integrate
+from arms import CHORDWISE, FLAPWISE, rotating_cantilever, table_close
 
 from pinflex import FlexibleModel, beam
 from pinflex.cases.spin_up import KANE_URDF, SPIN_UP_S
@@ -211,10 +212,6 @@ def test_eq1_warns_on_a_fast_spin_up_and_strict_refuses(kane):
     assert slow.validity.indicator < slow.validity.threshold
 
 
-FLAPWISE = {2: 4.1373, 4: 5.5850, 6: 7.3603, 8: 9.2568, 10: 11.2023, 50: 51.0805}
-CHORDWISE = {2: 3.6195, 4: 3.888, 6: 4.2393, 8: 4.6105, 10: 4.97, 50: 7.3362}
-
-
 def test_modes_at_speed_of_a_rotating_cantilever_match_the_published_table(tmp_path):
     """Flapwise and chordwise ω √(ρA L⁴ / EI) at speeds γ = Ω √(ρA L⁴ / EI) of 2 to 50.
 
@@ -223,21 +220,9 @@ def test_modes_at_speed_of_a_rotating_cantilever_match_the_published_table(tmp_p
     model of 40 elements, axial stretching and Coriolis coupling included; flapwise: spatial
     model of 20 elements).
     """
-    W = 0.01
-    A, inertia = W * W, W**4 / 12
-    L = 70.0 * math.sqrt(inertia / A)
-    E, rho = 70e9, 2700.0
-    T = math.sqrt(rho * A * L**4 / (E * inertia))
-    text = KANE.replace('<pinflex:material E="7e10" linear_density="1.2"/>',
-                        f'<pinflex:material E="{E}" G="{E / 2.6}" density="{rho}"/>').replace(
-        '<pinflex:section A="2e-4" Iy="2e-7" Iz="2e-7" J="4e-7"/>',
-        f'<pinflex:section shape="rectangle" width="{W}" height="{W}"/>')
-    (tmp_path / "chord.urdf").write_text(text.replace(
-        'elements="10" normal="0 0 1" tip="10 0 0"', f'elements="40" normal="0 0 1" tip="{L} 0 0"'))
-    (tmp_path / "flap.urdf").write_text(text.replace(
-        'elements="10" normal="0 0 1" tip="10 0 0"', f'elements="20" tip="{L} 0 0"'))
-    chord = ErlsDynamics(FlexibleModel(tmp_path / "chord.urdf", planar=True))
-    spatial = FlexibleModel(tmp_path / "flap.urdf")
+    chord_path, flap_path, T = rotating_cantilever(tmp_path, KANE)
+    chord = ErlsDynamics(FlexibleModel(chord_path, planar=True))
+    spatial = FlexibleModel(flap_path)
     flap = ErlsDynamics(spatial)
     out_of_plane = [i for i, n in enumerate(spatial.x_names) if n.endswith(("uz", "ry"))]
     in_plane = [i for i, n in enumerate(spatial.x_names) if n.endswith(("uy", "rz"))]
@@ -247,16 +232,12 @@ def test_modes_at_speed_of_a_rotating_cantilever_match_the_published_table(tmp_p
         is_flap = share[out_of_plane].sum(0) > share[in_plane].sum(0)
         return 2 * math.pi * res.freq_hz[is_flap][0] * T
 
-    def close(value, ref):
-        digits = len(str(ref).split(".")[1])
-        return abs(value - ref) <= 0.5 * 10.0**-digits + 2e-4 * ref
-
     for gamma in FLAPWISE:
         res = modes_at_speed(chord, [0.0], [gamma / T], n_modes=2)
         assert not res.unstable
-        assert close(2 * math.pi * res.freq_hz[0] * T, CHORDWISE[gamma]), gamma
+        assert table_close(2 * math.pi * res.freq_hz[0] * T, CHORDWISE[gamma]), gamma
         res = modes_at_speed(flap, [0.0], [gamma / T], n_modes=6)
-        assert close(lowest_flapwise(res), FLAPWISE[gamma]), gamma
+        assert table_close(lowest_flapwise(res), FLAPWISE[gamma]), gamma
     # eq. (1) alone (gyroscopic terms only) misses the stiffening: far below at γ = 10
     res = modes_at_speed(flap, [0.0], [10.0 / T], terms="eq1", n_modes=6)
     assert lowest_flapwise(res) < 0.5 * FLAPWISE[10]

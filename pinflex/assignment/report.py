@@ -49,6 +49,9 @@ class AssignmentData:
             ``slack`` (>= 0 when satisfied), ``active``, ``exact_slack`` (floors and bands),
             ``unit`` (a bound's is its variable's).
         design_units: ``{name: unit}`` of the design variables.
+        validity: The validity indicator of eq. (1) along the trajectory at the design after
+            (:class:`pinflex.erls.validity.Validity`), or None; its per-sample ratios of
+            mode 1 are the ``speed_ratio`` and ``accel_ratio`` columns.
     """
 
     times_s: np.ndarray
@@ -64,6 +67,7 @@ class AssignmentData:
     design_after: dict
     constraints: tuple[dict, ...]
     design_units: dict = field(default_factory=dict)
+    validity: Any = None
 
     @property
     def active(self) -> list[str]:
@@ -89,6 +93,9 @@ class AssignmentData:
                     error_before=float(self.before_hz[k, c] / tgt - 1.0),
                     error_after=float(self.after_hz[k, c] / tgt - 1.0),
                 )
+                if self.validity is not None:
+                    row.update(speed_ratio=float(self.validity.speed_ratio[k, 0]),
+                               accel_ratio=float(self.validity.accel_ratio[k, 0]))
                 out.append(row)
         return out
 
@@ -146,6 +153,7 @@ class AssignmentData:
             ],
             "constraints": [dict(c) for c in self.constraints],
             "active_constraints": self.active,
+            "validity": None if self.validity is None else self.validity.to_dict(),
         }
 
     def to_json(self, path: str | Path) -> Path:
@@ -299,4 +307,5 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
         design_after=dict(result.design),
         constraints=tuple(constraints),
         design_units={d.name: d.unit for d in model.design},
+        validity=getattr(result, "validity", None),
     )

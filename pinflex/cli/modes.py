@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 import numpy as np
 
@@ -12,6 +13,7 @@ from pinflex.cli.common import (
     joints_text,
     parse_values,
     robot_description,
+    speed_terms,
 )
 
 
@@ -27,6 +29,24 @@ def add_parser(sub) -> None:
     p.add_argument("--trajectory", metavar="CSV",
                    help="joint trajectory (header: t, joint names): frequencies along the "
                    "motion, modes followed by their shapes (default 3 modes)")
+    p.add_argument("--terms", choices=("eq1", "full"),
+                   help="with --trajectory: the modes of the MOVING arm (modes at speed: every "
+                   "joint held by its motor on the motion, velocities and accelerations from "
+                   "the samples by second-order finite differences) with eq. (1)'s gyroscopic "
+                   "terms only (eq1) or with the centrifugal, Euler and geometric-stiffness "
+                   "terms (full); without it: the modes of the arm frozen at each pose")
+    p.add_argument("--at-speed", action="store_true", help="the same as --terms full")
+    p.add_argument("--rates", choices=("samples", "motion"), default="samples",
+                   help="with --terms: joint velocities and accelerations by second-order "
+                   "finite differences of the samples (samples, default) or from the "
+                   "rest-to-rest quintic spline through them that pinflex simulate drives "
+                   "(motion)")
+    p.add_argument("--gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
+                   help="with --terms full: gravity [m/s^2] in world axes, whose axial loads "
+                   "stiffen or soften the beams (default none)")
+    p.add_argument("--strict", action="store_true",
+                   help="with --trajectory: refuse a motion too fast for eq. (1) (validity "
+                   "indicator above its threshold) instead of warning")
     p.add_argument("--csv", metavar="OUT", help="with --trajectory: write one row per sample")
     p.add_argument("--png", metavar="OUT", nargs="?", const="",
                    help="with --trajectory: write a chart (default name: the trajectory's "
@@ -54,8 +74,9 @@ def cmd_modes(args: argparse.Namespace) -> int:
             raise ConfigurationError("--tol picks the elements at one pose (--q); it does not "
                                      "go with --trajectory")
         return _along(model, args)
-    if args.csv or args.png is not None:
-        raise ConfigurationError("--csv and --png go with --trajectory")
+    if args.csv or args.png is not None or speed_terms(args, args.gravity) or args.strict:
+        raise ConfigurationError("--csv, --png, --terms, --at-speed, --gravity and --strict go "
+                                 "with --trajectory")
     q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
     fidelity = None
     if args.tol is not None:
@@ -191,7 +212,22 @@ def _along(model, args: argparse.Namespace) -> int:
     traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
     bar = ProgressBar(traj.n_samples, "modes along: samples",
                       enabled=not args.no_progress and sys.stderr.isatty())
-    res = modes_along(model, traj, modes=args.modes or 3, progress=bar)
+    terms = speed_terms(args, args.gravity)
+    res: Any
+    if terms is None and args.rates != "samples":
+        from pinflex.exceptions import ConfigurationError
+
+        raise ConfigurationError("--rates gives the joint rates of the modes at speed: give it "
+                                 "with --terms (the frozen-pose modes need no rates)")
+    if terms is None:
+        res = modes_along(model, traj, modes=args.modes or 3, progress=bar, strict=args.strict)
+    else:
+        from pinflex.dynamics import ErlsDynamics
+        from pinflex.dynamics.modes import modes_at_speed_along
+
+        res = modes_at_speed_along(ErlsDynamics(model, gravity=args.gravity), traj,
+                                   terms=terms, n_modes=args.modes or 3, rates=args.rates,
+                                   strict=args.strict, progress=bar)
     bar.close()
     if args.csv:
         res.to_csv(args.csv)

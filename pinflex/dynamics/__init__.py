@@ -9,6 +9,7 @@
 * :mod:`~pinflex.dynamics.integrators`: generalized-α and ``scipy`` integrators, exact holds;
 * :mod:`~pinflex.dynamics.damping`: one damping definition for simulation, FRF and export;
 * :mod:`~pinflex.dynamics.frf`: receptances at a pose;
+* :mod:`~pinflex.dynamics.export`: linear models (state space) about a moving state;
 * :mod:`~pinflex.dynamics.response`: a frame's deflection, peak, RMS, residual vibration.
 
 How far eq. (1) holds along a motion (the validity indicator every simulation reports):

@@ -71,23 +71,18 @@ def validity_chart(named, path) -> Path:
         named: ``[(name, Validity), ...]`` (:class:`pinflex.erls.validity.Validity`).
         path: PNG file.
     """
+    from pinflex.erls.validity import draw_validity
+
     fig = _figure(6.0, 3.6)
     ax = fig.subplots()
-    threshold = None
-    for name, v in named:
-        line, = ax.semilogy(v.times_s, np.maximum(v.speed_ratio[:, 0], 1e-12), lw=1.0,
-                            label=f"{name}: |ω|²/ω₁²")
-        ax.semilogy(v.times_s, np.maximum(v.accel_ratio[:, 0], 1e-12), lw=1.0, ls="--",
-                    color=line.get_color(), label=f"{name}: |α|/ω₁²")
-        threshold = v.threshold
-    if threshold is not None:
-        ax.axhline(threshold, color="k", lw=0.9, ls=":", label=f"threshold {threshold:g}")
-        top = max([threshold] + [max(v.max_speed_ratio, v.max_accel_ratio) for _, v in named])
-        ax.set_ylim(bottom=1e-5 * top)
+    for k, (name, v) in enumerate(named):
+        draw_validity(ax, v, label=name, threshold=k == 0)
+    if named:
+        top = max([named[0][1].threshold] + [v.indicator for _, v in named])
+        ax.set_ylim(bottom=1e-5 * top, top=3.0 * top)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("relative size of the terms eq. (1) leaves out")
     ax.set_title("validity of eq. (1) along the motion (pinflex.erls.validity)", fontsize=9)
-    ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     from pinflex.outputs import save_figure
 

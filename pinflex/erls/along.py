@@ -106,7 +106,7 @@ class ModesAlong:
             "mac_step": self.mac_step.tolist(),
             "events": [dict(e) for e in self.events],
             "summary": self.summary(),
-            "validity": None if self.validity is None else self.validity.summary(),
+            "validity": None if self.validity is None else self.validity.to_dict(),
         }
 
     def to_json(self) -> str:
@@ -161,12 +161,17 @@ class ModesAlong:
     def __repr__(self) -> str:
         return self.table()
 
-    def plot(self, path: str | Path) -> Path:
-        """PNG chart: tracked frequencies (lines), sorted ones (dots), events (vertical lines)."""
-        from matplotlib.figure import Figure
+    def figure(self):
+        """The chart as a matplotlib Figure (what :meth:`plot` writes).
 
-        fig = Figure(figsize=(7.5, 4.2), dpi=110)
-        ax = fig.add_subplot()
+        Top: tracked frequencies (lines), sorted ones (dots), events (vertical lines). Below,
+        when the validity indicator is set: ``|ω_L|²/ω₁²`` and ``|α_L|/ω₁²`` per sample (the
+        CSV's ``speed_ratio`` and ``accel_ratio``) with the threshold
+        (:func:`pinflex.erls.validity.draw_validity`).
+        """
+        from pinflex.erls.validity import figure_with_validity
+
+        fig, (ax,), _ = figure_with_validity(self.validity, 7.5, 4.2)
         t = self.times_s
         for c, m in enumerate(self.modes):
             line, = ax.plot(t, self.freq_hz[:, c], lw=1.8, label=f"mode {m} (tracked)")
@@ -174,16 +179,19 @@ class ModesAlong:
         for e in self.events:
             style = {"crossing": "--", "veering": ":", "ambiguous": "-."}.get(e["kind"], ":")
             ax.axvline(e["time_s"], color="0.4", ls=style, lw=0.9)
-        ax.set_xlabel("time [s]")
         ax.set_ylabel("frequency [Hz]")
         ax.set_title(f"{self.robot}: eigenfrequencies along the trajectory "
                      "(dots: sorted, lines: tracked)", fontsize=9)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="best")
         fig.tight_layout()
+        return fig
+
+    def plot(self, path: str | Path) -> Path:
+        """Write :meth:`figure` as a PNG; returns the path."""
         from pinflex.outputs import save_figure
 
-        return save_figure(fig, path)
+        return save_figure(self.figure(), path)
 
 
 def trajectory_for(arm, traj: Trajectory) -> np.ndarray:

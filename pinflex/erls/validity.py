@@ -107,6 +107,17 @@ class Validity:
                 "definition": "max over samples of |omega_link|^2/omega_i^2 and "
                               "|alpha_link|/omega_i^2 (pinflex.erls.validity)"}
 
+    def to_dict(self) -> dict:
+        """:meth:`summary` plus the per-sample ratios of mode 1 (``times_s``,
+        ``speed_ratio``, ``accel_ratio``; None where a frequency was not positive)."""
+
+        def clean(a):
+            return [float(x) if np.isfinite(x) else None for x in np.asarray(a, dtype=float)]
+
+        return {**self.summary(), "times_s": clean(self.times_s),
+                "speed_ratio": clean(self.speed_ratio[:, 0]),
+                "accel_ratio": clean(self.accel_ratio[:, 0])}
+
     def write_csv(self, path) -> Path:
         """One row per sample: time, link rates and both ratios per mode.
 
@@ -131,6 +142,75 @@ class Validity:
         p = Path(path)
         write_text(p, "\n".join(lines) + "\n", "validity CSV")
         return p
+
+
+def draw_validity(ax, v: Validity, *, label: str = "", color=None,
+                  threshold: bool = True) -> dict:
+    """Draw both ratios of mode 1 against time on ``ax`` (log scale), with the threshold.
+
+    The one drawing of the indicator on every chart (simulation, modes along a motion,
+    assignment): ``|ω_L|²/ω₁²`` solid, ``|α_L|/ω₁²`` dashed, the threshold dotted. Ratios
+    below 1e-12 are drawn at 1e-12 (a motion at rest has zeros on a log axis).
+
+    Args:
+        ax: A matplotlib Axes.
+        v: The :class:`Validity`.
+        label: Prefix of the legend entries (e.g. a design name).
+        color: Line colour (default: the axes' next one).
+        threshold: Draw the threshold line (once per axes).
+
+    Returns:
+        The arrays drawn: ``times_s``, ``speed_ratio``, ``accel_ratio`` (mode 1, as in
+        :meth:`Validity.write_csv` and the tables) and ``threshold``.
+    """
+    pre = f"{label}: " if label else ""
+    speed = np.asarray(v.speed_ratio[:, 0], dtype=float)
+    accel = np.asarray(v.accel_ratio[:, 0], dtype=float)
+    line, = ax.semilogy(v.times_s, np.maximum(np.nan_to_num(speed), 1e-12), lw=1.0,
+                        color=color, label=f"{pre}|ω|²/ω₁²")
+    ax.semilogy(v.times_s, np.maximum(np.nan_to_num(accel), 1e-12), lw=1.0, ls="--",
+                color=line.get_color(), label=f"{pre}|α|/ω₁²")
+    if threshold:
+        ax.axhline(v.threshold, color="k", lw=0.9, ls=":", label=f"threshold {v.threshold:g}")
+        top = max(v.threshold, v.indicator)
+        ax.set_ylim(bottom=1e-5 * top, top=3.0 * top)
+    ax.grid(alpha=0.3, which="both")
+    return {"times_s": np.asarray(v.times_s, dtype=float), "speed_ratio": speed,
+            "accel_ratio": accel, "threshold": float(v.threshold)}
+
+
+def figure_with_validity(validity: Validity | None, width: float, height: float,
+                         panels: int = 1, dpi: int = 110):
+    """A Figure of ``panels`` stacked panels sharing time, plus the indicator's panel below.
+
+    Args:
+        validity: The :class:`Validity` to draw (:func:`draw_validity`), or None (no panel).
+        width: Figure width [in].
+        height: Height of the ``panels`` [in] (the indicator's panel adds 1.8 in).
+        panels: Number of panels above the indicator.
+        dpi: Resolution.
+
+    Returns:
+        ``(fig, axes, low)``: the Figure (on its own Agg canvas: pyplot is left alone), the list
+        of the upper axes and the indicator's axes (None without ``validity``); the lowest
+        panel carries the time label.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height + (1.8 if validity is not None else 0.0)), dpi=dpi)
+    FigureCanvasAgg(fig)
+    n = panels + (validity is not None)
+    ratios = [2.2] * panels + ([1.0] if validity is not None else [])
+    axes = list(fig.subplots(n, 1, sharex=True, squeeze=False, height_ratios=ratios)[:, 0])
+    low = None
+    if validity is not None:
+        low = axes.pop()
+        draw_validity(low, validity)
+        low.set_ylabel("eq. (1) validity", fontsize=8)
+        low.legend(fontsize=6, loc="best")
+    (low or axes[-1]).set_xlabel("time [s]")
+    return fig, axes, low
 
 
 def _max(a: np.ndarray) -> float:
@@ -194,6 +274,80 @@ def sample_rates(times_s, q) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros_like(q), np.zeros_like(q)
     qd = np.gradient(q, t, axis=0, edge_order=2)
     return qd, np.gradient(qd, t, axis=0, edge_order=2)
+
+
+#: Size of the speed terms' error from finite-difference rates, relative to the elastic
+#: forces, above which :func:`check_sample_rates` warns.
+RATES_TOLERANCE = 1e-2
+
+
+def sample_rates_error(times_s, q) -> tuple[float, float]:
+    """Estimated error of :func:`sample_rates`, relative to the peak rates.
+
+    ``|r_h − r_2h|`` at the samples shared with every other sample (Richardson with a
+    first-order factor: the accelerations are second-order accurate inside and first-order at
+    the ends; inside the estimate is about three times the error).
+
+    Args:
+        times_s: Sample times (n,) [s].
+        q: Joint samples (n, nv).
+
+    Returns:
+        ``(velocity, acceleration)`` errors, each the largest over the shared samples and the
+        joints relative to the largest rate of the samples (0 for a motion at rest; NaN for
+        fewer than 5 samples).
+    """
+    t = np.asarray(times_s, dtype=float)
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    if t.size < 5:
+        return float("nan"), float("nan")
+    qd, qdd = sample_rates(t, q)
+    qd2, qdd2 = sample_rates(t[::2], q[::2])
+    out = []
+    for fine, coarse in ((qd, qd2), (qdd, qdd2)):
+        peak = float(np.abs(fine).max())
+        out.append(float(np.abs(fine[::2] - coarse).max()) / peak if peak > 0 else 0.0)
+    return out[0], out[1]
+
+
+def check_sample_rates(times_s, q, indicator: Validity | None,
+                       what: str = "the trajectory") -> dict:
+    """Whether finite-difference rates are good enough for the speed terms; warn if not.
+
+    The speed terms are ``|ω_L|²/ω_i²`` and ``|α_L|/ω_i²`` of the elastic forces, so relative
+    rate errors ``e_v``, ``e_a`` (:func:`sample_rates_error`) change them by about
+    ``2 e_v · max |ω_L|²/ω_i² + e_a · max |α_L|/ω_i²`` of the elastic forces. Above
+    :data:`RATES_TOLERANCE` a :class:`~pinflex.exceptions.TrajectoryWarning` says so (resample
+    finer, or take the interpolated motion's rates).
+
+    Args:
+        times_s: Sample times (n,) [s].
+        q: Joint samples (n, nv).
+        indicator: The :class:`Validity` of the motion (None: the rate errors themselves are
+            compared with the tolerance).
+        what: Name of the motion in the message.
+
+    Returns:
+        ``{"velocity": e_v, "acceleration": e_a, "terms": the change of the terms}`` (None
+        where fewer than 5 samples leave nothing to compare).
+    """
+    from pinflex.exceptions import TrajectoryWarning
+
+    e_v, e_a = sample_rates_error(times_s, q)
+    if not np.isfinite(e_v):
+        return {"velocity": None, "acceleration": None, "terms": None}
+    if indicator is None:
+        effect = max(e_v, e_a)
+    else:
+        effect = 2.0 * e_v * indicator.max_speed_ratio + e_a * indicator.max_accel_ratio
+    if effect > RATES_TOLERANCE:
+        warnings.warn(
+            f"{what} is sampled too coarsely for its velocities and accelerations by finite "
+            f"differences (estimated errors {100 * e_v:.2g} % and {100 * e_a:.2g} % of their "
+            f"peaks): the speed terms change by about {effect:.2g} of the elastic forces; "
+            "resample it finer, or take the rates of the interpolated motion (rates='motion', "
+            "--rates motion)", TrajectoryWarning, stacklevel=2)
+    return {"velocity": e_v, "acceleration": e_a, "terms": effect}
 
 
 def validity(model, times_s, q, qd, qdd, omega_rad_s, *, threshold: float = VALIDITY_THRESHOLD,
