@@ -245,6 +245,10 @@ def end_load_equilibrium(planform: Planform, force_n: np.ndarray, moment_nm: flo
     # Continuation parameter t in [0, sqrt(level)]; the load fraction is (t / sqrt(level))^2.
     history: list[tuple[float, float]] = [(0.0, 0.0)]
     t, step = 0.0, min(max_load_step, root_level)
+    if moment != 0.0 or boundary == "fixed-guided":
+        # The unknown of these loads can turn back as the load grows (a moment against the
+        # force): start small so that the predictions follow it.
+        step = min(step, 0.25 * max_load_step)
     result = None
     while t < root_level * (1.0 - 1e-14):
         t_new = min(root_level, t + step)
@@ -273,19 +277,23 @@ def _continuation_step(shooting: _Shooting, history: list[tuple[float, float]], 
     The prediction extrapolates the last two points linearly in t. From the unloaded state
     that chord has half the slope of an unknown growing like the load (t^2: a pure moment,
     a guided end at moderate loads), so there the quadratic extrapolation is tried too. An
-    answer farther from its prediction than half the predicted change is refused.
+    answer farther from its prediction than half the predicted change (plus 0.02 per unit
+    of t under a moment or at a guided end) is refused: the step is halved.
     """
     if len(history) < 2:
         solved = shooting.newton(shooting.linear_guess(frac), frac)
         return solved
     (t1, p1), (t2, p2) = history[-2], history[-1]
+    turn = 0.02 if shooting.moment != 0.0 or shooting.guided else 0.0
     predictions = [p2 + (p2 - p1) * (t_new - t2) / (t2 - t1)]
     if t1 == 0.0:
         predictions.append(p2 * (t_new / t2) ** 2)
     for predicted in predictions:
         solved = shooting.newton(predicted, frac)
-        change = abs(predicted - p2) + 1e-9
-        if solved is not None and abs(solved[0] - predicted) <= 0.5 * change:
+        # Half the predicted change; with a moment or a guided end, whose unknown can turn
+        # back (its change vanishes there), plus 0.02 per unit of t.
+        allowed = 0.5 * abs(predicted - p2) + turn * (t_new - t2) + 1e-9
+        if solved is not None and abs(solved[0] - predicted) <= allowed:
             return solved
     return None
 
