@@ -295,6 +295,12 @@ def _continuation_step(shooting: _Shooting, history: list[tuple[float, float]], 
         allowed = 0.5 * abs(predicted - p2) + turn * (t_new - t2) + 1e-9
         if solved is not None and abs(solved[0] - predicted) <= allowed:
             return solved
+    if turn and solved is not None and abs(solved[0] - p2) <= 0.25:
+        # Where the unknown turns, the extrapolations miss by their first order: accept a
+        # small change that Newton also reaches from the last answer (the same basin).
+        again = shooting.newton(p2, frac)
+        if again is not None and abs(again[0] - solved[0]) <= 1e-8 * (1.0 + abs(p2)):
+            return solved
     return None
 
 
