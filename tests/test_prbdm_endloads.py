@@ -7,6 +7,7 @@ table (via the fixed-guided beam's antisymmetry); Howell and Midha's table of th
 characteristic radius (gamma, Theta_max).
 """
 
+import json
 import math
 
 import numpy as np
@@ -341,3 +342,20 @@ def test_extended_cases_cover_the_bullet():
     assert any(c.alpha and c.beta for c in EXTENDED_CASES)
     assert any(c.boundary == "fixed-guided" for c in EXTENDED_CASES)
     assert max(c.alpha for c in EXTENDED_CASES) == 10.0
+
+
+def test_cli_fits_on_the_extended_cases(capsys):
+    """`pinflex prbdm --loads extended` fits on those cases and names each case's error."""
+    from pinflex.cli import main
+
+    status = main(["prbdm", "--beam", "uniform", "--links", "2", "--starts", "1",
+                   "--loads", "extended", "--json", "--no-progress"])
+    assert status == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["load_labels"] == [c.label for c in EXTENDED_CASES]
+    assert len(data["load_errors"]) == len(EXTENDED_CASES)
+    assert all(0.0 <= e < 1.0 for e in data["load_errors"])
+    status = main(["prbdm", "--loads", "extended", "--definitions", "paper-code",
+                   "--no-progress"])
+    assert status == 2
+    assert "--loads extended" in capsys.readouterr().err

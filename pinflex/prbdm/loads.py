@@ -26,8 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import InvalidChain
+from ..exceptions import ConfigurationError, InvalidChain, NewtonDivergence
 from .beams import Planform, equivalent_bending_stiffness
+from .chain import PrbdmChain, solve_tip_statics
 from .elastica import BOUNDARIES, ElasticaSolution, end_load_equilibrium
 
 #: Largest load level a case may ask for (alpha and |beta|): the range the truth is tested on.
@@ -141,3 +142,36 @@ def case_truth(planform: Planform, case: LoadCase) -> ElasticaSolution:
     """The elastica of a beam under one load case (the deflection truth)."""
     return end_load_equilibrium(planform, case.force_n(planform), case.moment_nm(planform),
                                 case.boundary)
+
+
+def case_errors(planform: Planform, chain: PrbdmChain, cases: Sequence[LoadCase],
+                truth_tips_m: np.ndarray | None = None, load_steps: int = 4) -> np.ndarray:
+    """Tip error of a chain under each case, over the truth's tip displacement [-].
+
+    The chain's own statics (:func:`~pinflex.prbdm.chain.solve_tip_statics` from rest in
+    ``load_steps`` equal steps) against the elastica (:func:`case_truth`, or the given tips).
+    A case the chain cannot take (a guided end on a 1R chain) or whose Newton fails is NaN.
+
+    Args:
+        planform: The beam.
+        chain: A :class:`~pinflex.prbdm.chain.PrbdmChain` of the beam.
+        cases: The load cases.
+        truth_tips_m: Elastica tips of the cases, shape (l, 2) [m] (computed if None).
+        load_steps: Load steps of each chain solve.
+
+    Returns:
+        Errors, shape (l,).
+    """
+    tips = (np.array([case_truth(planform, c).tip_m for c in cases]).reshape(-1, 2)
+            if truth_tips_m is None else np.asarray(truth_tips_m, dtype=float))
+    undeformed = np.array([planform.length_m, 0.0])
+    out = np.full(len(cases), np.nan)
+    for i, case in enumerate(cases):
+        try:
+            tip = solve_tip_statics(chain, case.force_n(planform), load_steps=load_steps,
+                                    moment_nm=case.moment_nm(planform),
+                                    boundary=case.boundary).tip_m
+        except (ConfigurationError, NewtonDivergence):
+            continue
+        out[i] = np.linalg.norm(tip - tips[i]) / np.linalg.norm(tips[i] - undeformed)
+    return out
