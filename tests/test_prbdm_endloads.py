@@ -124,7 +124,7 @@ def test_inclined_loads_on_random_beam_match_independent_shooting(angle, beta):
 # -- truth: fixed-guided beam ---------------------------------------------------------------
 
 def test_fixed_guided_small_load_is_linear_theory():
-    """w = P L^3 / (12 EI) and a guide moment of P L / 2 at a small load (uniform beam)."""
+    """Small load: deflection P L^3 / (12 EI) and a guide moment of P L / 2 (uniform beam)."""
     beam = uniform_beam()
     ei = E_STEEL * beam.width_m(0.0) * beam.thickness_m**3 / 12.0
     force = 1e-4 * ei / beam.length_m**2
@@ -151,8 +151,11 @@ MATTIASSON = [(1.0, 0.30172, 0.05643), (2.0, 0.49346, 0.16064), (5.0, 0.71379, 0
 
 @pytest.mark.parametrize("alpha, w_ref, u_ref", MATTIASSON)
 def test_fixed_guided_is_two_cantilevers_of_mattiasson(alpha, w_ref, u_ref):
-    """Antisymmetry: a guided beam under P is two cantilevers of length L/2 under P, so at
-    4 alpha its end moves by Mattiasson's (u, w) at alpha, to the printed digits."""
+    """A guided beam at 4 alpha moves its end by Mattiasson's (u, w) at alpha.
+
+    Antisymmetry: a guided beam under P is two cantilevers of length L/2 under P; the
+    printed digits are matched.
+    """
     beam = uniform_beam()
     force = LoadCase(alpha=alpha).force_n(beam) * 4.0
     sol = end_load_equilibrium(beam, force, 0.0, "fixed-guided")
@@ -200,8 +203,11 @@ def test_howell_1r_path_error_band(n, gamma, theta_max):
 
 
 def test_howell_fixed_guided_band_by_antisymmetry():
-    """Howell's fixed-guided model (pivots (1 - gamma) L / 2 from each end, K = 2 gamma
-    K_Theta EI / L) is two 1R half-cantilevers: its path error reaches 0.5 % at 64.3 deg."""
+    """Howell's fixed-guided model's path error reaches 0.5 % at 64.3 deg.
+
+    The model (pivots (1 - gamma) L / 2 from each end, K = 2 gamma K_Theta EI / L) is two 1R
+    half-cantilevers.
+    """
     beam = uniform_beam()
     gamma = 0.8517
     length = beam.length_m
@@ -254,9 +260,11 @@ def test_howell_1r_statics_closed_form(alpha, beta):
 
 @pytest.mark.parametrize("alpha", [2.0, 10.0])
 def test_howell_fixed_guided_statics_closed_form(alpha):
-    """Guided 2R: theta_2 = -theta_1 = -Theta, 2 K Theta = P gamma L cos(Theta), and the
-    guide's moment is -K Theta - P (1 - gamma) L / 2 (joint 2's balance, its arm the
-    horizontal end link)."""
+    """Guided 2R: theta_2 = -theta_1, 2 K Theta = P gamma L cos(Theta).
+
+    The guide's moment is -K Theta - P (1 - gamma) L / 2 (joint 2's balance, its arm the
+    horizontal end link).
+    """
     beam = uniform_beam()
     ei = E_STEEL * beam.width_m(0.0) * beam.thickness_m**3 / 12.0
     length, gamma = beam.length_m, 0.85
@@ -273,6 +281,7 @@ def test_howell_fixed_guided_statics_closed_form(alpha):
 
 
 def test_chain_statics_refuse_bad_end_conditions():
+    """A guided end needs 2 joints and takes no moment; unknown boundaries are named."""
     beam = uniform_beam()
     one = build_chain(beam, np.array([0.15, 0.85]), np.array([1e6]))
     two = build_chain(beam, np.array([0.2, 0.4, 0.4]), np.array([1e6, 1e6]))
@@ -291,6 +300,7 @@ def test_chain_statics_refuse_bad_end_conditions():
     ({"alpha": float("nan")}, "finite"), ({"beta": -10.5}, "beta"),
 ])
 def test_load_case_validation(kwargs, match):
+    """Out-of-range or contradictory load cases are refused by name."""
     with pytest.raises(InvalidChain, match=match):
         LoadCase(**kwargs)
 
@@ -307,8 +317,10 @@ def test_default_truth_unchanged_by_load_cases():
 
 
 def test_fit_reports_per_case_errors_of_the_chain_statics():
-    """A 3R fit on moments, inclined/combined forces and guided ends: each reported case error
-    is the fitted chain's own statics against the elastica, recomputed here."""
+    """A 3R fit's reported per-case errors are its chain's own statics against the elastica.
+
+    Cases: a moment, an inclined and a combined load, a guided end; recomputed here.
+    """
     beam = uniform_beam()
     cases = (LoadCase(beta=1.5), LoadCase(alpha=10.0, angle_deg=45.0),
              LoadCase(alpha=2.0, angle_deg=90.0, beta=1.0),
@@ -328,6 +340,7 @@ def test_fit_reports_per_case_errors_of_the_chain_statics():
 
 
 def test_fit_refuses_loads_it_cannot_use():
+    """Guided loads on a 1R chain and load cases with the paper's definitions are refused."""
     beam = uniform_beam()
     with pytest.raises(InvalidChain, match="1R chain cannot"):
         fit_prbdm(beam, 1, loads=(LoadCase(alpha=2.0, boundary="fixed-guided"),), n_starts=1)
