@@ -12,6 +12,7 @@ import sys
 
 import numpy as np
 
+from pinflex.prbdm.loads import LOAD_SETS
 from pinflex.prbdm.options import DEFINITIONS, OBJECTIVES, STIFFNESS_LAWS
 
 
@@ -74,6 +75,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              "whose estimated combined error against the converged beam truth "
                              "is at most TOL; the estimate is the combined fit's residual "
                              "against that truth")
+    parser.add_argument("--loads", choices=LOAD_SETS, default="paper",
+                        help="load cases of the deflection loss: 'paper' (transverse tip "
+                             "forces, alpha = 0.5, 1, 2, 5) or 'extended' (tip moments, "
+                             "inclined and combined end loads, fixed-guided ends, up to "
+                             "alpha = 10; at least 2 joints); see docs/prbdm.md")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.add_argument("--html", default=None, metavar="FILE",
@@ -91,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
     from pinflex.exceptions import ConfigurationError
     from pinflex.outputs import check_file_target
     from pinflex.prbdm.beams import random_beam, uniform_beam
+    from pinflex.prbdm.loads import load_set
     from pinflex.prbdm.mapping import fit_prbdm
     from pinflex.prbdm.problem import compute_truth
     from pinflex.validation import require_count
@@ -112,6 +119,9 @@ def run(args: argparse.Namespace) -> int:
                       or args.samples is not None):
         raise ConfigurationError("--epsilon, --code-force and --samples belong to "
                                  "--definitions paper-text/paper-code")
+    if args.loads != "paper" and (paper or args.tol is not None):
+        raise ConfigurationError(f"--loads {args.loads} is a pinflex-definitions fit of a given "
+                                 "chain size: drop --definitions/--tol")
     if args.epsilon is not None and not (np.isfinite(args.epsilon) and args.epsilon > 0):
         raise ConfigurationError(f"--epsilon {args.epsilon!r} must be a positive angle [rad]")
     if args.code_force is not None and not (np.isfinite(args.code_force)
@@ -148,7 +158,8 @@ def run(args: argparse.Namespace) -> int:
         args.links = choice.n_joints
     else:
         n_modes = args.modes if args.modes is not None else args.links
-        truth = compute_truth(beam, max(n_modes, 1))
+        truth = compute_truth(beam, max(n_modes, 1),
+                              loads=None if args.loads == "paper" else load_set(args.loads))
         fit = fit_prbdm(beam, args.links, n_modes, objective=args.objective,
                         stiffness_law=args.stiffness_law, poses=args.poses,
                         n_starts=args.starts, seed=args.seed, truth=truth,
@@ -206,10 +217,16 @@ def run(args: argparse.Namespace) -> int:
         if np.isfinite(fit.deflection_error):
             print(f"  deflection error   {fit.deflection_error:.3e} (not fitted)")
         return 0
+    loads = ("load cases " + ", ".join(fit.load_labels) if fit.load_labels
+             else "alpha = " + ", ".join(f"{a:g}" for a in fit.alphas))
     print("  losses, pinflex definitions (RMS per-mode frequency error; tip error over the "
-          "tip displacement; alpha = " + ", ".join(f"{a:g}" for a in fit.alphas) + "):")
+          f"tip displacement; {loads}):")
     print(f"    eigen {fit.eigen_error:.3e}  deflection {fit.deflection_error:.3e}  "
           f"combined {fit.combined_error:.3e}")
+    if fit.load_labels:
+        print("  tip error per load case (over its tip displacement): "
+              + ", ".join(f"{name} {err:.3e}" for name, err in
+                          zip(fit.load_labels, fit.load_errors)))
     print(f"  paper 001's definitions at this fit's {fit.n_poses} pose(s) (eq. 15a sum of "
           "eq. 16; eq. 19 over the tip position, same loads):")
     print(f"    eq. 15a sum {fit.eq15a_sum:.3e}  (mean over poses {fit.eq15a_mean:.3e})  "

@@ -27,6 +27,7 @@ from pinflex.linalg import readonly as _readonly
 
 from ..exceptions import ConfigurationError, InvalidChain, NewtonDivergence
 from .beams import Planform, chain_segments
+from .elastica import BOUNDARIES
 
 
 @dataclass(frozen=True)
@@ -201,30 +202,35 @@ def mass_matrix_condition(chain: PrbdmChain, poses: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class StaticsResult:
-    r"""Equilibrium of the chain under a dead tip force.
+    r"""Equilibrium of the chain under dead end loads.
 
     Attributes:
         theta: Joint angles, shape (n,) [rad].
         tip_m: Tip position (x, z) [m].
         iterations: Newton iterations summed over load steps.
-        residual_nm: Final residual norm :math:`\|K\theta - J^T F\|` [N m].
+        residual_nm: Final residual norm :math:`\|K\theta - J^T F - (M + \lambda) 1\|` [N m].
+        end_moment_nm: Moment at the end [N m]: the applied moment of a free end, the guide's
+            reaction :math:`\lambda` of a fixed-guided end.
     """
 
     theta: np.ndarray
     tip_m: np.ndarray
     iterations: int
     residual_nm: float
+    end_moment_nm: float = 0.0
 
 
-def _statics_terms(chain: PrbdmChain, data: pin.Data, theta: np.ndarray, force: np.ndarray):
+def _statics_terms(chain: PrbdmChain, data: pin.Data, theta: np.ndarray, force: np.ndarray,
+                   moment: float = 0.0):
     """Residual, tangent stiffness and tip position at theta."""
     jac = pin.computeFrameJacobian(chain.model, data, theta, chain.tip_frame_id,
                                    pin.LOCAL_WORLD_ALIGNED).reshape(6, -1)
     tip = data.oMf[chain.tip_frame_id].translation
     # Joint axes are all +Y, so column j is y x (p - o_j) = ((p - o_j)_z, 0, -(p - o_j)_x) and
-    # d(J_j)/d(theta_i) = -(p - o_max(i,j)): the tangent needs only the Jacobian itself.
+    # d(J_j)/d(theta_i) = -(p - o_max(i,j)): the tangent needs only the Jacobian itself. An end
+    # moment M does the work M sum(theta) (the end link's absolute angle): a constant term.
     jx, jz = jac[0], jac[2]
-    generalized = jx * force[0] + jz * force[1]
+    generalized = jx * force[0] + jz * force[1] + moment
     arm_work = jx * force[1] - jz * force[0]
     n = theta.size
     idx = np.arange(n)
@@ -236,24 +242,34 @@ def _statics_terms(chain: PrbdmChain, data: pin.Data, theta: np.ndarray, force: 
 
 def solve_tip_statics(chain: PrbdmChain, force_n: np.ndarray, theta0: np.ndarray | None = None,
                       load_steps: int = 1, max_iter: int = 30, tol: float = 1e-10,
-                      data: pin.Data | None = None) -> StaticsResult:
-    r"""Solve :math:`K\theta = J^T(\theta) F` (eq. 8) by Newton's method for a dead tip force.
+                      data: pin.Data | None = None, moment_nm: float = 0.0,
+                      boundary: str = "cantilever") -> StaticsResult:
+    r"""Solve :math:`K\theta = J^T(\theta) F + M\,1` (eq. 8) by Newton's method for dead end loads.
 
     The load is applied in ``load_steps`` equal increments, each solved by full Newton with
-    the exact tangent :math:`K - \partial(J^T F)/\partial\theta`. An answer is returned only if
-    it is (1) converged, (2) a stable equilibrium (tangent positive definite) and (3) on the
-    physical branch: for a dead tip force every link's absolute angle lies between the
-    undeformed axis and the force direction (as the elastica's section rotation does). Anything
-    else raises, so a wrong branch is never returned silently.
+    the exact tangent :math:`K - \partial(J^T F)/\partial\theta` (an end moment M adds the
+    constant :math:`M\,1`: its work is M times the end link's absolute angle). A
+    ``"fixed-guided"`` end holds the end link's absolute angle at zero,
+    :math:`1^T\theta = 0`, with the guide's moment :math:`\lambda` as a Lagrange multiplier
+    (bordered Newton on :math:`(\theta, \lambda)`; at least 2 joints). An answer is returned only
+    if it is (1) converged and (2) a stable equilibrium (tangent positive definite, on the
+    constraint's null space for a guided end); under a force alone it must also be (3) on the
+    physical branch: every link's absolute angle lies between the undeformed axis and the force
+    direction (as the elastica's section rotation does). A pure end moment has one
+    equilibrium (the energy is convex); under a force and a moment together the answer is the
+    stable equilibrium reached by the load steps, without a branch check. Anything else raises,
+    so a wrong branch of a force is never returned silently.
 
     Args:
         chain: The chain.
-        force_n: Tip force (Fx, Fz) in the bending plane [N].
+        force_n: End force (Fx, Fz) in the bending plane [N].
         theta0: Starting joint angles [rad]; default zeros (start of the first load step).
         load_steps: Number of equal load increments.
         max_iter: Newton iterations allowed per load step.
         tol: Convergence tolerance on the residual relative to :math:`\|K\theta\| + \|J^TF\|`.
         data: Optional Pinocchio data to reuse.
+        moment_nm: End moment about +Y [N m] (positive turns +X towards -Z); free end only.
+        boundary: ``"cantilever"`` (free end) or ``"fixed-guided"``.
 
     Returns:
         The equilibrium.
@@ -261,53 +277,87 @@ def solve_tip_statics(chain: PrbdmChain, force_n: np.ndarray, theta0: np.ndarray
     Raises:
         NewtonDivergence: If Newton does not converge, converges to an unstable equilibrium or
             to a non-physical branch; the message suggests more load steps.
-        ConfigurationError: If ``theta0`` has the wrong shape.
+        ConfigurationError: If ``theta0`` has the wrong shape, the boundary is unknown, a moment
+            is applied to a guided end, or a guided chain has fewer than 2 joints.
     """
     force = np.asarray(force_n, dtype=float)
     if force.shape != (2,) or not np.all(np.isfinite(force)):
         raise ConfigurationError(f"force_n must be a finite (Fx, Fz) pair [N], got {force_n!r}")
+    moment = float(moment_nm)
+    if not np.isfinite(moment):
+        raise ConfigurationError(f"moment_nm = {moment_nm!r} must be a finite moment [N m]")
+    if boundary not in BOUNDARIES:
+        raise ConfigurationError(f"boundary = {boundary!r}; expected one of {BOUNDARIES}")
+    guided = boundary == "fixed-guided"
+    if guided and (moment != 0.0 or chain.n_joints < 2):
+        raise ConfigurationError(
+            "a fixed-guided end holds the end link's angle: it takes no applied moment "
+            f"(got {moment:g} N m) and needs at least 2 joints (the chain has "
+            f"{chain.n_joints})")
     if int(load_steps) != load_steps or load_steps < 1:
         raise ConfigurationError(f"load_steps = {load_steps!r} must be a positive integer")
     data = chain.model.createData() if data is None else data
     theta = _pose(chain, theta0).copy()
+    n = chain.n_joints
+    ones = np.ones(n)
+    reaction = 0.0
     iterations = 0
     for step in range(1, int(load_steps) + 1):
         f_step = force * step / load_steps
+        m_step = moment * step / load_steps
         for iteration in range(max_iter + 1):
-            residual, tangent, _ = _statics_terms(chain, data, theta, f_step)
+            residual, tangent, _ = _statics_terms(chain, data, theta, f_step, m_step)
+            residual = residual - reaction * ones
             norm = float(np.linalg.norm(residual))
             scale = (np.linalg.norm(chain.stiffness_nm_rad * theta)
                      + np.linalg.norm(residual - chain.stiffness_nm_rad * theta) + 1e-300)
-            if norm <= tol * scale:
+            closed = abs(float(theta.sum())) <= tol if guided else True
+            if norm <= tol * scale and closed:
                 break
             if iteration == max_iter or not np.isfinite(norm):
                 raise NewtonDivergence(
                     f"Newton did not converge in {max_iter} iterations at load step "
-                    f"{step}/{load_steps} for tip force {force} N (residual {norm:.3e} N m); "
-                    "increase load_steps or start closer to the solution")
+                    f"{step}/{load_steps} for end force {force} N, end moment {moment:g} N m "
+                    f"({boundary}; residual {norm:.3e} N m); increase load_steps or start "
+                    "closer to the solution")
             try:
-                theta = theta - np.linalg.solve(tangent, residual)
+                if guided:
+                    bordered = np.block([[tangent, -ones[:, None]], [ones[None, :], 0.0]])
+                    delta = np.linalg.solve(bordered, np.concatenate([residual, [theta.sum()]]))
+                    theta = theta - delta[:n]
+                    reaction -= float(delta[n])
+                else:
+                    theta = theta - np.linalg.solve(tangent, residual)
             except np.linalg.LinAlgError as err:
                 raise NewtonDivergence(
-                    f"singular tangent stiffness at load step {step}/{load_steps} for tip "
-                    f"force {force} N; increase load_steps") from err
+                    f"singular tangent stiffness at load step {step}/{load_steps} for end "
+                    f"force {force} N ({boundary}); increase load_steps") from err
             iterations += 1
-    residual, tangent, tip = _statics_terms(chain, data, theta, force)
-    _check_branch(chain, theta, tangent, force, load_steps)
+    residual, tangent, tip = _statics_terms(chain, data, theta, force, moment)
+    residual = residual - reaction * ones
+    _check_branch(chain, theta, tangent, force, load_steps, moment, guided)
     return StaticsResult(theta=_readonly(theta), tip_m=tip, iterations=iterations,
-                         residual_nm=float(np.linalg.norm(residual)))
+                         residual_nm=float(np.linalg.norm(residual)),
+                         end_moment_nm=reaction if guided else moment)
 
 
 def _check_branch(chain: PrbdmChain, theta: np.ndarray, tangent: np.ndarray, force: np.ndarray,
-                  load_steps: int) -> None:
-    """Raise NewtonDivergence unless theta is a stable equilibrium on the physical branch."""
+                  load_steps: int, moment: float = 0.0, guided: bool = False) -> None:
+    """Raise NewtonDivergence unless theta is a stable equilibrium (on the physical branch)."""
+    sym = 0.5 * (tangent + tangent.T)
+    if guided:
+        # The admissible variations keep sum(theta) = 0: d_j - d_n, j < n.
+        basis = np.vstack([np.eye(theta.size - 1), -np.ones((1, theta.size - 1))])
+        sym = basis.T @ sym @ basis
     try:
-        np.linalg.cholesky(0.5 * (tangent + tangent.T))
+        np.linalg.cholesky(sym)
     except np.linalg.LinAlgError as err:
         raise NewtonDivergence(
-            f"Newton converged to an unstable equilibrium for tip force {force} N "
-            f"(joint angles {np.round(theta, 4).tolist()} rad); increase load_steps "
-            f"(now {load_steps})") from err
+            f"Newton converged to an unstable equilibrium for end force {force} N, end moment "
+            f"{moment:g} N m (joint angles {np.round(theta, 4).tolist()} rad); increase "
+            f"load_steps (now {load_steps})") from err
+    if moment != 0.0 or not np.any(force):
+        return
     force_angle = float(np.arctan2(-force[1], force[0]))
     absolute = np.cumsum(theta)
     low, high = min(0.0, force_angle), max(0.0, force_angle)

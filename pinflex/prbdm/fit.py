@@ -69,6 +69,9 @@ class PrbdmFit:
             (paper definitions): how stable the optimum is.
         n_samples: Designs of the global sample (paper definitions).
         load_n: Tip forces of the paper definitions' deflection loss, (l, 2) [N].
+        load_labels: Names of the load cases of ``load_errors`` when the fit was given load
+            cases (:mod:`pinflex.prbdm.loads`), e.g. ``"b=1"``, ``"guided a=10 @90"``; empty
+            for paper 001's transverse forces at ``alphas``.
     """
 
     __repr__ = dataclass_summary  # fields summarised: no array dumps
@@ -110,6 +113,7 @@ class PrbdmFit:
     start_values: tuple[float, ...] = ()
     n_samples: int = 0
     load_n: tuple[tuple[float, float], ...] = ()
+    load_labels: tuple[str, ...] = ()
 
     @property
     def exactly_determined(self) -> bool:
@@ -206,5 +210,5 @@ def make_fit(problem: MappingProblem, x: np.ndarray, ev: Evaluation, objective: 
         n_free_parameters=n_free, n_matched=n_matched,
         determinacy="exactly determined" if n_free >= n_matched else "over-determined",
         metrics=problem.metrics, eq15a_sum=ev.eq15a_sum, eq15a_mean=ev.eq15a_mean,
-        n_evaluations=int(n_evaluations), **extra,
+        n_evaluations=int(n_evaluations), load_labels=problem.load_labels, **extra,
     )

@@ -21,7 +21,7 @@ simplex equality (15b) is a residual on the fractions' sum, to which the losses 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -30,6 +30,7 @@ from ..exceptions import InvalidChain, MappingFailed
 from ..progress import ProgressBar
 from .beams import Planform
 from .fit import PrbdmFit, make_fit
+from .loads import LoadCase
 from .massmatrix import ChainWorkspace
 from .options import DEFINITIONS, OBJECTIVES
 from .paper import PAPER_EPS_SINGLE, PAPER_TEXT, paper_losses
@@ -40,6 +41,7 @@ from .problem import (
     MappingProblem,
     TruthData,
     build_problem,
+    compute_truth,
     design_bounds,
     evaluate,
 )
@@ -317,7 +319,8 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
               progress: bool = False, jacobian: str = "analytic",
               metrics: str = "pinflex", definitions: str = "pinflex",
               epsilon: float | None = None, code_force_n: float | None = None,
-              n_samples: int | None = None) -> PrbdmFit:
+              n_samples: int | None = None,
+              loads: Sequence[LoadCase] | None = None) -> PrbdmFit:
     """Fit an nR PRBDM to a beam.
 
     Args:
@@ -355,6 +358,12 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         code_force_n: Tip force of the code's deflection case [N] (default: the force that
             deflects the beam's tip by 0.1437 L, as the code's 1 MN did on its beam).
         n_samples: Global sample size of the paper's definitions' search.
+        loads: Load cases of the deflection loss (:mod:`pinflex.prbdm.loads`: inclined
+            forces, end moments, fixed-guided ends; default: paper 001's transverse forces at
+            alpha = 0.5, 1, 2, 5). With an end moment or a fixed-guided end the fit runs on the
+            reference path (``jacobian="finite-difference"``: the chain's own statics); the
+            per-case errors are ``fit.load_errors`` beside ``fit.load_labels``. Pinflex's
+            definitions only; not with ``truth``.
 
     Returns:
         The fit; for ``"pareto"`` the front is in ``fit.pareto`` and the returned model is the
@@ -369,6 +378,15 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         raise InvalidChain(f"objective = {objective!r}; expected one of {OBJECTIVES}")
     if definitions not in DEFINITIONS:
         raise InvalidChain(f"definitions = {definitions!r}; expected one of {DEFINITIONS}")
+    if loads is not None:
+        if definitions != "pinflex" or truth is not None:
+            raise InvalidChain("loads are pinflex definitions' load cases and make their own "
+                               "truth: leave definitions='pinflex' and truth=None")
+        truth = compute_truth(planform, n_joints if n_modes is None else int(n_modes),
+                              loads=loads)
+    elif truth is not None and definitions != "pinflex" and truth.cases:
+        raise InvalidChain("the paper's definitions use their own loads: give a truth "
+                           "without load cases")
     if definitions != "pinflex":
         if (stiffness_law, metrics) != ("segment", "pinflex") or not isinstance(poses, str) \
                 or poses != "straight":
@@ -382,6 +400,9 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
         poses, stiffness_law, metrics = PAPER_TEXT.poses(n_joints, step=step), "paper", "paper"
     n_starts = 16 if n_starts is None else int(n_starts)
     problem = build_problem(planform, n_joints, n_modes, poses, stiffness_law, truth, metrics)
+    if problem.end_loads:
+        # End moments and guided ends: the chain's own statics (sensitivity.py refuses them).
+        jacobian = "finite-difference"
     front: list[tuple[np.ndarray, Evaluation]] = []
     count = [0]
     if objective in ("pareto", "combined"):

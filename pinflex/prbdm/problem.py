@@ -24,12 +24,16 @@ Losses (fractions, not percent):
   kept as ``deflection_error_position``. The loss is the root mean square over loads.
 * combined: :math:`\sqrt{e_{eig}^2 + e_{defl}^2}` (eq. 27).
 
-Loads are dead tip forces perpendicular to the undeformed beam with
-:math:`\alpha = P L^2 / EI_{eq}` (:func:`~pinflex.prbdm.beams.equivalent_bending_stiffness`).
+Loads are, by default, dead tip forces perpendicular to the undeformed beam with
+:math:`\alpha = P L^2 / EI_{eq}` (:func:`~pinflex.prbdm.beams.equivalent_bending_stiffness`);
+:func:`compute_truth` also takes load cases (:mod:`pinflex.prbdm.loads`: inclined forces, end
+moments, fixed-guided ends), whose problems are evaluated by :func:`evaluate` (the chain's own
+statics, :func:`~pinflex.prbdm.chain.solve_tip_statics`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -38,6 +42,7 @@ import pinocchio as pin
 from ..exceptions import InvalidChain, NewtonDivergence
 from .beams import Planform, chain_segments, equivalent_bending_stiffness
 from .chain import PrbdmChain, build_chain, chain_frequencies, solve_tip_statics
+from .loads import LoadCase, case_truth
 from .options import DEFAULT_ALPHAS, STIFFNESS_LAWS
 from .truth import BeamModes, beam_frequencies, elastica_tip
 
@@ -90,6 +95,20 @@ class MappingProblem:
     stiffness_law: str
     alphas: np.ndarray
     metrics: str = "pinflex"
+    moments_nm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    guided: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    load_labels: tuple[str, ...] = ()
+
+    @property
+    def end_loads(self) -> bool:
+        """True when a load carries an end moment or a fixed-guided end (reference path only)."""
+        return bool(np.any(self.moments_nm != 0.0) or np.any(self.guided))
+
+    def load(self, index: int) -> tuple[np.ndarray, float, str]:
+        """Force [N], end moment [N m] and boundary of load ``index``."""
+        moment = float(self.moments_nm[index]) if self.moments_nm.size else 0.0
+        guided = bool(self.guided[index]) if self.guided.size else False
+        return self.forces_n[index], moment, "fixed-guided" if guided else "cantilever"
 
     @property
     def n_stiffness_params(self) -> int:
@@ -111,24 +130,46 @@ class TruthData:
         alphas: Load levels, shape (l,).
         forces_n: Tip forces, shape (l, 2) [N].
         tips_m: Elastica tip positions, shape (l, 2) [m].
+        cases: The load cases (:class:`~pinflex.prbdm.loads.LoadCase`) when given; empty for
+            the transverse forces at ``alphas``.
+        moments_nm: End moments, shape (l,) [N m] (empty: none).
+        guided: Fixed-guided ends, shape (l,) (empty: none).
     """
 
     modes: BeamModes
     alphas: np.ndarray
     forces_n: np.ndarray
     tips_m: np.ndarray
+    cases: tuple[LoadCase, ...] = ()
+    moments_nm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    guided: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
 def compute_truth(planform: Planform, n_modes: int = 5,
-                  alphas: tuple[float, ...] = DEFAULT_ALPHAS) -> TruthData:
-    r"""Converged beam frequencies and elastica tips under transverse dead loads.
+                  alphas: tuple[float, ...] = DEFAULT_ALPHAS,
+                  loads: Sequence[LoadCase] | None = None) -> TruthData:
+    r"""Converged beam frequencies and elastica tips under dead end loads.
 
     Args:
         planform: The beam.
         n_modes: Number of bending modes.
-        alphas: Load levels :math:`\alpha = PL^2/EI_{eq}` (downward tip force).
+        alphas: Load levels :math:`\alpha = PL^2/EI_{eq}` (downward tip force), used when
+            ``loads`` is None (paper 001's loads).
+        loads: Load cases (:mod:`pinflex.prbdm.loads`: inclined forces, end moments,
+            fixed-guided ends) replacing ``alphas``.
     """
     modes = beam_frequencies(planform, n_modes)
+    if loads is not None:
+        cases = tuple(loads)
+        if not all(isinstance(c, LoadCase) for c in cases):
+            raise InvalidChain("loads must be a sequence of pinflex.prbdm.loads.LoadCase")
+        solutions = [case_truth(planform, case) for case in cases]
+        return TruthData(
+            modes, np.array([c.alpha for c in cases]),
+            np.array([c.force_n(planform) for c in cases]).reshape(-1, 2),
+            np.array([s.tip_m for s in solutions]).reshape(-1, 2), cases,
+            np.array([c.moment_nm(planform) for c in cases]),
+            np.array([c.boundary == "fixed-guided" for c in cases], dtype=bool))
     ei = equivalent_bending_stiffness(planform)
     alpha = np.asarray(alphas, dtype=float)
     forces = np.column_stack([np.zeros_like(alpha), -alpha * ei / planform.length_m**2])
@@ -166,6 +207,9 @@ def build_problem(planform: Planform, n_joints: int, n_modes: int | None = None,
         raise InvalidChain(f"an {n_joints}R chain has {n_joints} modes; n_modes = {n_modes}")
     if truth is None:
         truth = compute_truth(planform, n_modes)
+    if n_joints < 2 and np.any(truth.guided):
+        raise InvalidChain("a fixed-guided load holds the end link's angle: a 1R chain cannot "
+                           "deflect under it; use 2 or more joints or drop the guided cases")
     if truth.modes.freq_hz.size < n_modes:
         raise InvalidChain(f"truth has {truth.modes.freq_hz.size} modes, {n_modes} requested")
     if isinstance(poses, str):
@@ -181,7 +225,8 @@ def build_problem(planform: Planform, n_joints: int, n_modes: int | None = None,
             raise InvalidChain(f"poses have {pose_array.shape[1]} columns, need {n_joints}")
     return MappingProblem(planform, int(n_joints), n_modes, truth.modes.freq_hz[:n_modes].copy(),
                           pose_array, truth.forces_n, truth.tips_m, stiffness_law, truth.alphas,
-                          metrics)
+                          metrics, truth.moments_nm, truth.guided,
+                          tuple(c.label for c in truth.cases))
 
 
 def design_bounds(problem: MappingProblem) -> tuple[np.ndarray, np.ndarray]:
@@ -335,8 +380,8 @@ def evaluate(problem: MappingProblem, x: np.ndarray, deflection: bool = True,
     failed = 0
     if deflection and n_loads:
         undeformed = np.array([problem.planform.length_m, 0.0])
-        for ell, force in enumerate(problem.forces_n):
-            tips[ell], ok = _solve_load(chain, data, ell, force, load_steps, warm)
+        for ell in range(n_loads):
+            tips[ell], ok = _solve_load(chain, data, ell, problem.load(ell), load_steps, warm)
             failed += not ok
             truth = problem.truth_tips_m[ell]
             miss = np.linalg.norm(tips[ell] - truth) if ok else np.nan
@@ -365,14 +410,22 @@ def _eigen_residuals(problem: MappingProblem, model_hz: np.ndarray) -> np.ndarra
     return rel.ravel() / np.sqrt(rel.size)
 
 
-def _solve_load(chain: PrbdmChain, data: pin.Data, index: int, force: np.ndarray,
-                load_steps: int, warm) -> tuple[np.ndarray, bool]:
-    """Tip of one load, warm-started from ``warm`` (if given) and cold otherwise."""
-    start = None if warm is None else warm.angles.get(index)
+def _solve_load(chain: PrbdmChain, data: pin.Data, index: int,
+                load: tuple[np.ndarray, float, str], load_steps: int,
+                warm) -> tuple[np.ndarray, bool]:
+    """Tip of one load, warm-started from ``warm`` (if given) and cold otherwise.
+
+    A force with an end moment has no branch check in the chain statics, so it is always
+    solved cold (by the load steps from rest), never from another design's angles.
+    """
+    force, moment, boundary = load
+    start = None if warm is None or (moment != 0.0 and np.any(force)) \
+        else warm.angles.get(index)
     attempts = [(start, 1), (None, load_steps)] if start is not None else [(None, load_steps)]
     for theta0, steps in attempts:
         try:
-            result = solve_tip_statics(chain, force, theta0, load_steps=steps, data=data)
+            result = solve_tip_statics(chain, force, theta0, load_steps=steps, data=data,
+                                       moment_nm=moment, boundary=boundary)
         except NewtonDivergence:
             continue
         if warm is not None:

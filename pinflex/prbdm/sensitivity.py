@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..exceptions import InvalidChain
 from .beams import compliance_between, partial_integrals_and_widths
 from .massmatrix import ChainWorkspace, chain_indices, link_moments, mass_g, mass_structure
 from .planar import planar_indices, planar_statics, tip_derivative
@@ -197,6 +198,10 @@ def _evaluate(problem: MappingProblem, x: np.ndarray, workspace: ChainWorkspace,
     The Jacobian is formed now (``want_jacobian`` True), never (False) or on demand (None: a
     closure over this evaluation's state is returned with the residuals).
     """
+    if deflection and problem.end_loads:
+        raise InvalidChain("end moments and fixed-guided ends are solved by the reference path "
+                           "only: use pinflex.prbdm.problem.evaluate (fits: "
+                           "jacobian='finite-difference', chosen by fit_prbdm for such loads)")
     n = problem.n_joints
     n1 = n + 1
     ix = chain_indices(n)

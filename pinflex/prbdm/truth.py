@@ -5,8 +5,10 @@ Two independent references replace paper 001's COMSOL runs:
 * **Bending frequencies** from a 1D Euler-Bernoulli finite-element model with Hermite cubic
   elements and consistent mass, nodes on every planform vertex (the width is linear inside each
   element, so element matrices are integrated exactly by Gauss rules).
-* **Large tip deflection** from the geometrically exact planar elastica under a tip force of
-  fixed direction (a dead load), solved by shooting on the root bending moment.
+* **Large deflection** from the geometrically exact planar elastica under dead end loads (a
+  force of fixed direction and an end moment; cantilever or fixed-guided), solved by shooting
+  in :mod:`pinflex.prbdm.elastica` (:func:`elastica_tip` and :func:`end_load_equilibrium` are
+  re-exported here).
 
 Conditioning: the direct generalized problem :math:`K\phi = \lambda M\phi` loses digits as
 elements are added, because a symmetric eigensolver's absolute error is about
@@ -22,20 +24,23 @@ whose two extrapolants must agree (a built-in convergence check, :func:`beam_fre
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.integrate import solve_ivp
 
 from ..beam import hermite_shapes
 from ..exceptions import InvalidBeam, TruthNotConverged
-from .beams import Planform, equivalent_bending_stiffness
+from .beams import Planform
+from .elastica import ElasticaSolution, elastica_tip, end_load_equilibrium
 
 # Exact for EI of degree <= 3 (a linear depth taper: I ~ t^3) and rho A of degree <= 2.
 _GAUSS2 = np.polynomial.legendre.leggauss(3)
 _GAUSS4 = np.polynomial.legendre.leggauss(5)
+
+__all__ = ["BeamModes", "ElasticaSolution", "assemble_beam", "beam_frequencies", "beam_mesh",
+           "elastica_tip", "element_matrices", "end_load_equilibrium", "fe_eigenvalues",
+           "relative_compliance_matrix"]
 
 
 def beam_mesh(planform: Planform, max_element_m: float, max_stiffness_ratio: float = 1.5,
@@ -292,176 +297,3 @@ def beam_frequencies(planform: Planform, n_modes: int = 5, max_element_m: float 
         freq_hz=np.sqrt(rich[1]) / (2.0 * np.pi), eigval=rich[1], mesh_eigval=lam,
         n_elements=(n_el[0], n_el[1], n_el[2]), observed_order=order, rel_error_estimate=gap,
     )
-
-
-@dataclass(frozen=True)
-class ElasticaSolution:
-    """Large-deflection equilibrium of the cantilever under a dead tip force.
-
-    Attributes:
-        force_n: Tip force (Fx, Fz) in the bending plane [N].
-        tip_m: Deformed tip position (x, z) [m]; the undeformed tip is (L, 0).
-        tip_rotation_rad: Tip section rotation about +Y [rad] (positive turns x towards -z).
-        root_moment_nm: Bending moment about +Y at the root [N m].
-        length_m: Beam length L [m].
-    """
-
-    force_n: np.ndarray
-    tip_m: np.ndarray
-    tip_rotation_rad: float
-    root_moment_nm: float
-    length_m: float
-
-    @property
-    def tip_displacement_m(self) -> np.ndarray:
-        """Tip displacement from the undeformed tip (dx, dz) [m]."""
-        return self.tip_m - np.array([self.length_m, 0.0])
-
-
-def _integrate_elastica(planform: Planform, force: np.ndarray, tip_rotation: float,
-                        rtol: float) -> tuple[np.ndarray, np.ndarray]:
-    r"""Shoot from the free tip to the root for a trial tip rotation.
-
-    Integrates :math:`(x, z, \phi, M)` and the variational pair :math:`(h, \mu)` =
-    :math:`\partial(\phi, M)/\partial\phi_L` backwards from the tip, where :math:`M = 0`,
-    :math:`h = 1`, :math:`\mu = 0`; positions are relative to the tip.
-
-    Returns:
-        The root state (x, z, phi, M, h, mu) and (min phi, max phi, min h) over the beam.
-    """
-    fx, fz = float(force[0]), float(force[1])
-    e = planform.material.youngs_modulus_pa
-    x_v = planform.x_m
-    # EI is linear in s between vertices when the thickness is uniform: EI = ei_b + k (s - b).
-    ei_v = e * planform.area_moment_m4(x_v)
-    linear = planform.thickness_profile_m is None
-    cos, sin = math.cos, math.sin
-
-    def piece_rhs(b: float, ei_b: float, k: float):
-        def rhs(s, y):
-            c, sn = cos(y[2]), sin(y[2])
-            ei = ei_b + k * (s - b)
-            return [c, -sn, y[3] / ei, sn * fx + c * fz, y[5] / ei, (c * fx - sn * fz) * y[4]]
-        return rhs
-
-    def rhs_general(s, y):
-        c, sn = np.cos(y[2]), np.sin(y[2])
-        ei = e * planform.area_moment_m4(s)
-        return [c, -sn, y[3] / ei, sn * fx + c * fz, y[5] / ei, (c * fx - sn * fz) * y[4]]
-
-    state = np.array([0.0, 0.0, tip_rotation, 0.0, 1.0, 0.0])
-    low, high, h_min = tip_rotation, tip_rotation, 1.0
-    for j in range(x_v.size - 1, 0, -1):
-        a, b = float(x_v[j]), float(x_v[j - 1])
-        rhs = piece_rhs(b, float(ei_v[j - 1]), float((ei_v[j] - ei_v[j - 1]) / (a - b))) \
-            if linear else rhs_general
-        sol = solve_ivp(rhs, (a, b), state, method="DOP853", rtol=rtol, atol=rtol * 1e-3)
-        if not sol.success:
-            raise TruthNotConverged(f"elastica integration failed on [{b:g}, {a:g}] m: "
-                                    f"{sol.message}")
-        state = sol.y[:, -1]
-        low, high = min(low, float(sol.y[2].min())), max(high, float(sol.y[2].max()))
-        h_min = min(h_min, float(sol.y[4].min()))
-    return state, np.array([low, high, h_min])
-
-
-def _elastica_newton(planform: Planform, force: np.ndarray, phi_tip: float, rtol: float,
-                     max_iter: int = 12):
-    """Newton on the clamp condition phi(0) = 0 from tip rotation phi_tip; None if it fails."""
-    for _ in range(max_iter):
-        state, extremes = _integrate_elastica(planform, force, phi_tip, rtol)
-        if not np.all(np.isfinite(state)) or state[4] <= 0.0:
-            return None
-        step = state[2] / state[4]
-        if abs(step) <= 1e-12:
-            # Converged: the state belongs to this tip rotation (clamp residual <= 1e-12 h).
-            return phi_tip, state, extremes
-        phi_tip = phi_tip - step
-    return None
-
-
-def elastica_tip(planform: Planform, force_n: np.ndarray, rtol: float = 1e-11,
-                 max_load_step: float = 2.0) -> ElasticaSolution:
-    r"""Geometrically exact planar elastica of the cantilever under a dead tip force.
-
-    Equations along the arc length s (x along the beam, z transverse, phi the section rotation
-    about +Y so that :math:`z' = -\sin\phi`): :math:`x' = \cos\phi`,
-    :math:`\phi' = M / EI(s)`, :math:`M' = F_x \sin\phi + F_z \cos\phi`, with the beam clamped at
-    s = 0 (:math:`\phi = 0`) and free at s = L (:math:`M = 0`). The unknown is the tip rotation:
-    shooting from the tip to the root, piecewise between planform vertices, with Newton's
-    method on :math:`\phi(0) = 0` using the exact variational derivative. (Shooting on the
-    root moment instead is ill-conditioned at large loads: its sensitivity grows by orders of
-    magnitude, and a pinched planform amplifies it further.)
-
-    Large loads admit several equilibria (shapes with inflection points, unstable or far from
-    the loading path). The stable branch is followed by continuation in the load from zero:
-    the load grows in steps of at most ``max_load_step`` in :math:`\sqrt{\alpha}`
-    (:math:`\alpha = |F| L^2 / EI_{eq}`), each step predicted by extrapolating the tip rotation;
-    a step whose Newton fails or lands far from the prediction is halved. The answer must be
-    (1) on the physical branch, every section rotation between the undeformed axis and the
-    force direction, and (2) stable: the Jacobi field :math:`h = \partial\phi/\partial\phi_L`,
-    which satisfies the free-end condition, has no zero on the beam (no conjugate point).
-    Otherwise TruthNotConverged is raised.
-
-    Args:
-        planform: The beam.
-        force_n: Tip force (Fx, Fz) [N]; it keeps its direction as the beam deflects.
-        rtol: Relative tolerance of the ODE integration.
-        max_load_step: Largest continuation step in :math:`\sqrt{\alpha}`.
-
-    Returns:
-        The equilibrium.
-
-    Raises:
-        InvalidBeam: If the force is not a finite 2-vector.
-        TruthNotConverged: If continuation stalls or ends off the stable physical branch.
-    """
-    force = np.asarray(force_n, dtype=float)
-    if force.shape != (2,) or not np.all(np.isfinite(force)):
-        raise InvalidBeam(f"force_n must be a finite (Fx, Fz) pair [N], got {force_n!r}")
-    if not np.isfinite(max_load_step) or max_load_step <= 0.0:
-        raise InvalidBeam(f"max_load_step = {max_load_step!r} must be positive")
-    length = planform.length_m
-    magnitude = float(np.hypot(*force))
-    if magnitude == 0.0:
-        return ElasticaSolution(force, np.array([length, 0.0]), 0.0, 0.0, length)
-    root_alpha = np.sqrt(magnitude * length**2 / equivalent_bending_stiffness(planform))
-    # Continuation parameter t in [0, sqrt(alpha)]; the load fraction is (t / sqrt(alpha))^2.
-    history: list[tuple[float, float]] = [(0.0, 0.0)]
-    t, step = 0.0, min(max_load_step, root_alpha)
-    result = None
-    while t < root_alpha * (1.0 - 1e-14):
-        t_new = min(root_alpha, t + step)
-        frac = (t_new / root_alpha) ** 2
-        if len(history) >= 2:
-            (t1, p1), (t2, p2) = history[-2], history[-1]
-            predicted = p2 + (p2 - p1) * (t_new - t2) / (t2 - t1)
-        else:
-            # Linear theory: phi_L = -Fz L^2 / (2 EI) for a uniform beam, a fine first guess.
-            predicted = 0.5 * frac * root_alpha**2 * (-force[1] / magnitude)
-        solved = _elastica_newton(planform, frac * force, predicted, rtol)
-        jump = np.inf if solved is None else abs(solved[0] - predicted)
-        change = abs(predicted - history[-1][1]) + 1e-9
-        if solved is None or (len(history) >= 2 and jump > 0.5 * change):
-            step *= 0.5
-            if step < 1e-6 * max(root_alpha, 1.0):
-                raise TruthNotConverged(
-                    f"elastica continuation stalled at {frac:.4g} of tip force {force} N "
-                    f"(alpha {root_alpha**2:.4g})")
-            continue
-        history.append((t_new, solved[0]))
-        result = solved
-        t = t_new
-        step = min(max_load_step, 1.5 * step)
-    assert result is not None
-    phi_tip, state, extremes = result
-    force_angle = float(np.arctan2(-force[1], force[0]))
-    low, high = min(0.0, force_angle), max(0.0, force_angle)
-    slack = 1e-8
-    if extremes[0] < low - slack or extremes[1] > high + slack or extremes[2] <= 0.0:
-        raise TruthNotConverged(
-            f"elastica for tip force {force} N ended off the stable branch: section rotations "
-            f"in [{extremes[0]:.4f}, {extremes[1]:.4f}] rad against the sector [{low:.4f}, "
-            f"{high:.4f}], smallest Jacobi field {extremes[2]:.3g}")
-    tip = -state[:2]
-    return ElasticaSolution(force, tip, float(phi_tip), float(state[3]), length)
