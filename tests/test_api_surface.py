@@ -73,3 +73,17 @@ def test_free_functions_give_the_public_routes_numbers(two_link_planar):
     np.testing.assert_array_equal(T, arm.joint_transform(q))
     shapes = arm.modes(q, n_modes=2).shapes
     np.testing.assert_allclose(full_shapes(arm, q, shapes), T @ shapes, atol=1e-14)
+
+
+def test_taylor_model_shows_its_documented_fields_and_queries(two_link_planar):
+    """A TaylorModel's public names are its documented fields and queries; caches are private."""
+    from pinflex import expand
+
+    tm = expand(two_link_planar, [1.817, 5.312], order=2, modes=(1,))
+    documented = {"space", "q0", "y0", "modes", "joint_idx", "design_idx", "eigval_jets",
+                  "radius", "spectrum", "spectrum_slopes", "freq_jets", "joints", "order_choice",
+                  "order", "jet", "offsets", "error_estimate", "check_radius", "evaluate",
+                  "coefficients", "design_vars", "linear_parts"}
+    assert _public(tm) == documented
+    np.testing.assert_array_equal(tm.coefficients("eigval"), tm.jet("eigval").reshape(
+        tm.space.ncoef, -1))
