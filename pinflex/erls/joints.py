@@ -505,13 +505,18 @@ def joint_transform(model, q) -> np.ndarray:
     Raises:
         ConfigurationError: Invalid ``q`` or more than one pose.
     """
+    T = transform(model, *one_pose_twists(model, q, "joint_transform()"))
+    return np.eye(model.ndof) if T is None else T[0]
+
+
+def one_pose_twists(model, q, what: str) -> tuple:
+    """``(terms, alg, twist)`` of one pose ``q`` (nv,), checked; ``what`` names the caller."""
     q = check_q(model, q)
     if q.ndim != 1:
-        raise ConfigurationError("joint_transform() takes one pose")
+        raise ConfigurationError(f"{what} takes one pose")
     terms = kinematics.pose_terms(model, q[None])
     alg = BatchAlgebra(1)
-    T = transform(model, terms, alg, kinematics.root_twists(model, terms, alg))
-    return np.eye(model.ndof) if T is None else T[0]
+    return terms, alg, kinematics.root_twists(model, terms, alg)
 
 
 def full_shapes(model, q, shapes: np.ndarray) -> np.ndarray:

@@ -50,7 +50,6 @@ from pinflex.erls.assembly import matrices_from_terms
 from pinflex.erls.kinematics import NodePlacement
 from pinflex.erls.plan import build_plan, coordinate_map
 from pinflex.erls.terms import (
-    BatchAlgebra,
     DesignVariable,
     ModelPlan,
 )
@@ -714,13 +713,8 @@ class FlexibleModel:
         Raises:
             ConfigurationError: Invalid ``q`` or more than one pose.
         """
-        q = check_q(self, q)
-        if q.ndim != 1:
-            raise ConfigurationError("relative_motion_rows() takes one pose")
-        terms = kinematics.pose_terms(self, q[None])
-        alg = BatchAlgebra(1)
-        return joint_conditions.relative_motion_rows(self, terms, alg,
-                                                     kinematics.root_twists(self, terms, alg))[0]
+        return joint_conditions.relative_motion_rows(
+            self, *joint_conditions.one_pose_twists(self, q, "relative_motion_rows()"))[0]
 
     # ------------------------------------------------------------------ modal analysis
     def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True,
