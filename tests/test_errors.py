@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from conftest import TWO_LINK, single_link_urdf
 
+from pinflex.checks import check_y
 from pinflex.cli import main
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel
@@ -68,7 +69,7 @@ def test_design_value_outside_bounds():
     with pytest.raises(DesignVariableOutOfBounds):
         FlexibleModel(TWO_LINK, values={"m1": -0.1})
     with pytest.raises(DesignVariableNotFound, match="m1, m2"):
-        m.check_y({"m9": 0.1})
+        check_y(m, {"m9": 0.1})
 
 
 def test_wrong_number_of_joint_values():

@@ -11,6 +11,7 @@ from reference_fe import cantilever_hz, planar_two_link_frequencies, torsion_fix
 import pinflex
 from pinflex.description import parse
 from pinflex.erls import FlexibleModel
+from pinflex.erls.joints import joint_transform
 from pinflex.exceptions import (
     ConfigurationError,
     InvalidBeamProperty,
@@ -218,7 +219,7 @@ def test_locked_mode_shapes_satisfy_the_eigenproblem_on_full_coordinates():
     M, K = model.matrices(Q0)
     phi = res.shapes
     np.testing.assert_allclose(K @ phi, M @ phi * res.eigvals, rtol=1e-8, atol=1e-6)
-    T = model.joint_transform(Q0)
+    T = joint_transform(model, Q0)
     G = model.relative_motion_rows(Q0)
     assert T.shape == (model.nx + model.nv, model.ndof)
     r = G @ T @ phi

@@ -24,7 +24,7 @@ SRC = Path(__file__).resolve().parents[1] / "pinflex"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("exceptions", "lazy", "resources", "validation", "progress", "outputs", "linalg", "jets",
      "beam", "sections", "materials", "summaries", "fields"),
-    ("description",),
+    ("description", "checks"),
     ("native", "trajectory"),
     ("erls",),
     ("parametric", "prbdm"),

@@ -5,8 +5,9 @@ import pytest
 from arms import PRISMATIC
 from conftest import TWO_LINK, UR5, single_link_urdf
 
+from pinflex.checks import check_q
 from pinflex.description import parse
-from pinflex.erls import FlexibleModel, eigensolve, modal, one_pose, solve
+from pinflex.erls import FlexibleModel, eigensolve, kinematics, modal, one_pose, solve
 from pinflex.exceptions import ConfigurationError, DesignVariableOutOfBounds
 
 # a beam carrying a rigid link with an inertia and a (non-design) point mass, behind a
@@ -56,7 +57,7 @@ def models():
 def test_one_pose_mass_equals_the_block_assembly(models):
     """``S^T W S`` equals the structured block assembly of :func:`solve.mass` (round-off)."""
     for name, model, q in models:
-        terms = model.pose_terms(model.check_q(q)[None])
+        terms = kinematics.pose_terms(model, check_q(model, q)[None])
         plan = solve.solve_plan(model)
         twist = solve.root_twists(model, plan, terms, 1)
         layout = one_pose.one_pose_layout(model)
@@ -72,8 +73,8 @@ def test_one_pose_mass_equals_the_block_assembly(models):
 
 def _general_modes(model, q, n_modes):
     """Modes by the general path: nodal shapes, then node fields from the nodal root twists."""
-    q = model.check_q(q)
-    terms = model.pose_terms(q[None])
+    q = check_q(model, q)
+    terms = kinematics.pose_terms(model, q[None])
     plan = solve.solve_plan(model)
     twist = solve.root_twists(model, plan, terms, 1)
     M = solve.mass(model, terms, model.y0, 1)[0]
@@ -170,9 +171,9 @@ def test_one_kinematics_pass_equals_pose_terms_and_node_placements(models):
     ``pose_terms`` and a separate forward kinematics (``node_placements``).
     """
     for name, model, q in models:
-        q = model.check_q(q)
-        terms, placements = model.pose_terms_and_placements(q)
-        ref, ref_placements = model.pose_terms(q[None]), model.node_placements(q)
+        q = check_q(model, q)
+        terms, placements = kinematics.pose_terms_and_placements(model, q)
+        ref, ref_placements = kinematics.pose_terms(model, q[None]), model.node_placements(q)
         for got, want in ((terms.jac, ref.jac), (terms.rot, ref.rot), (terms.slide, ref.slide)):
             assert list(got) == list(want), name
             for key in want:
@@ -199,7 +200,7 @@ def test_one_pose_root_twists_equal_the_batched_ones(models):
     their ancestors, and skips the others (benchmark A's tool frame).
     """
     for name, model, q in models:
-        terms = model.pose_terms_one(model.check_q(q))
+        terms = kinematics.pose_terms_one(model, check_q(model, q))
         plan = solve.solve_plan(model)
         ref = solve.root_twists(model, plan, terms, 1)
         got = one_pose.root_twists_one(model, plan, terms)
@@ -233,7 +234,7 @@ def test_planar_rows_left_out_are_zero_at_every_pose():
     nx = planar.nx
     for _ in range(20):
         q = rng.uniform(-3, 3, size=2)
-        terms = planar.pose_terms_one(q)
+        terms = kinematics.pose_terms_one(planar, q)
         twist = one_pose.root_twists_one(planar, plan, terms)
         S = layout.S0.copy()  # the fill of mass_one, before the rows are gathered
         for link, re, rj in layout.beams:

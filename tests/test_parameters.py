@@ -8,8 +8,9 @@ from arms import two_link
 from reference_fe import planar_two_link_frequencies
 
 import pinflex
+from pinflex.checks import check_y
 from pinflex.description import parse
-from pinflex.erls import BatchAlgebra, FlexibleModel
+from pinflex.erls import BatchAlgebra, FlexibleModel, assembly, kinematics
 from pinflex.erls import design as erls_design
 from pinflex.exceptions import (
     DesignVariableNotFound,
@@ -118,7 +119,7 @@ def test_every_kind_of_design_parameter_moves_the_model_exactly(section, materia
     """Solid, hollow (inner diameter), rectangle, explicit I, E, G, ρ, μ: spatial model."""
     text = two_link(section, section, params=params, material=material)
     model = FlexibleModel(parse(text))
-    y = model.check_y(values)
+    y = check_y(model, values)
     rebuilt = FlexibleModel(parse(text), values=values)
     np.testing.assert_allclose(model.frequencies(Q0, y), rebuilt.frequencies(Q0), rtol=1e-9)
     assert not np.allclose(model.frequencies(Q0, y), model.frequencies(Q0), rtol=1e-4)
@@ -189,9 +190,9 @@ def test_cli_set_reaches_parameters(tmp_path, capsys):
 
 # ------------------------------------------------------------------ exact Taylor coefficients
 def _matrices(model, q, y):
-    terms = model.pose_terms(np.asarray(q, float)[None])
-    M0, Md, K = model.assemble(terms, BatchAlgebra(1))
-    from pinflex.erls.model import add_design_masses
+    terms = kinematics.pose_terms(model, np.asarray(q, float)[None])
+    M0, Md, K = assembly.assemble(model, terms, BatchAlgebra(1))
+    from pinflex.erls.assembly import add_design_masses
 
     M = add_design_masses(M0, Md.astype(complex) if np.iscomplexobj(y) else Md, y)
     return erls_design.add_to(model, terms, y, M, K, 1)

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import reference_fe as ref
 
+from pinflex.erls.joints import joint_transform
 from pinflex.exceptions import ModelValidityWarning
 
 Q = (1.8, 5.3)  # absolute link angles of benchmark A (the file's user convention)
@@ -135,7 +136,7 @@ def test_locked_joint_with_out_writes_the_playback(tmp_path, capsys):
     dyn = ErlsDynamics(model)
     x = np.random.default_rng(3).standard_normal(model.nx)
     full = np.concatenate([x, dyn.joint_offsets(np.array(Q))[0] @ x])
-    T = model.joint_transform(np.array(Q))
+    T = joint_transform(model, np.array(Q))
     solver = np.linalg.lstsq(T, full, rcond=None)[0]
     assert T @ solver == pytest.approx(full, abs=1e-12 * np.abs(full).max())
 

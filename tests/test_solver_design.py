@@ -157,11 +157,11 @@ def test_stiffness_jet_has_no_pose_terms_for_section_variables():
     f0 = erls_design.channel_values(model, lambda n: model.y0[names.index(n)])
     blocks = solver_design.link_blocks(model)
     for link, core in solve.solve_plan(model).cores.items():
-        chans = [(n, f) for n, (ch, f) in enumerate(zip(model.design_channels, f0))
+        chans = [(n, f) for n, (ch, f) in enumerate(zip(model.plan.design.channels, f0))
                  if ch.owner == link]
-        H = sum(f * blocks[n][0] for n, f in chans if model.design_channels[n].kind == "M")
+        H = sum(f * blocks[n][0] for n, f in chans if model.plan.design.channels[n].kind == "M")
         np.testing.assert_allclose(H, core.H_oo, rtol=1e-12, atol=1e-12 * np.abs(H).max())
-        Kh = sum(f * blocks[n] for n, f in chans if model.design_channels[n].kind == "K")
+        Kh = sum(f * blocks[n] for n, f in chans if model.plan.design.channels[n].kind == "K")
         np.testing.assert_allclose(Kh, np.eye(Kh.shape[0]), atol=1e-12)
 
 

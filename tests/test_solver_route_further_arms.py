@@ -226,7 +226,7 @@ def test_two_joint_factored_evaluation_equals_the_monomial_sum(order):
     rng = np.random.default_rng(order)
     for modes in ((1,), (1, 2, 3)):
         tm = expand(model, q0, order=order, modes=modes, design=[])
-        assert tm.evaluation_plan.grid is not None
+        assert tm._evaluation_plan.grid is not None
         Qs = [q0 + s * rng.normal(size=(n, 2)) for s in (1e-3, 0.1, 0.5, 2.0) for n in (1, 7)]
         _same_as_reference(tm, Qs + [np.asfortranarray(Qs[-1]), Qs[-1][::2]])
 
@@ -238,7 +238,7 @@ def test_three_and_one_joint_evaluation_equals_the_monomial_sum():
     rng = np.random.default_rng(2)
     Qs = [q0 + s * rng.normal(size=(6, 3)) for s in (1e-3, 0.1, 0.4, 1.5)]
     tm = expand(model, q0, order=3, modes=(1, 2, 3), design=[])
-    assert tm.evaluation_plan.q0_col is not None
+    assert tm._evaluation_plan.q0_col is not None
     _same_as_reference(tm, Qs + [q0 + 1.5 * rng.normal(size=(1, 3))])
     tm = expand(model, q0, order=2, modes=(1, 2))
     _same_as_reference(tm, Qs, (None, model.y0 + rng.uniform(-0.1, 0.1, size=(6, 1))))

@@ -78,7 +78,7 @@ def test_values_and_decisions_match_the_per_sample_estimate(arm, order):
 def test_screen_bound_is_above_every_sample_estimate(arm):
     """The screen's bound (from column extremes) is ≥ the worst per-sample estimate."""
     tm = expand(arm, Q0, Y0, order=4, modes=(1, 2, 3), design=[])
-    plan = tm.evaluation_plan
+    plan = tm._evaluation_plan
     rng = np.random.default_rng(7)
     finite = 0
     for scale in (0.02, 0.1, 0.2, 0.6):
@@ -133,8 +133,8 @@ def test_concurrent_evaluations_do_not_share_rows(arm):
 def test_two_joint_grid_values_equal_the_coefficient_sum(arm, order, modes):
     """The factored two-joint path equals Σ_α c_α δx^α (C- and F-ordered samples)."""
     tm = expand(arm, Q0, Y0, order=order, modes=modes, design=[])
-    assert tm.evaluation_plan.grid is not None
-    assert expand(arm, Q0, Y0, order=order, modes=modes).evaluation_plan.grid is None
+    assert tm._evaluation_plan.grid is not None
+    assert expand(arm, Q0, Y0, order=order, modes=modes)._evaluation_plan.grid is None
     rng = np.random.default_rng(order)
     Q = Q0 + 0.4 * rng.uniform(-1, 1, size=(33, 2))
     dx = tm.offsets(Q, warn=False)
@@ -165,7 +165,7 @@ def test_first_screen_bounds_every_check_row(arm):
     rng = np.random.default_rng(3)
     for modes in ((1,), (1, 2, 3)):
         tm = expand(arm, Q0, Y0, order=4, modes=modes, design=[])
-        grid, plan = tm.evaluation_plan.grid, tm.evaluation_plan
+        grid, plan = tm._evaluation_plan.grid, tm._evaluation_plan
         dirs = np.vstack([rng.normal(size=(4000, 2)), [[1.0, 1.0], [1.0, -1.0], [1.0, 0.0]]])
         dx = dirs * rng.uniform(0.01, 3.0, size=(dirs.shape[0], 1))
         mon = jets.monomials(tm.space, dx)
@@ -184,7 +184,7 @@ def test_first_screen_bounds_every_check_row(arm):
 def test_first_screen_never_passes_a_tolerance_some_sample_misses(arm):
     """Screen 1 passes only when every sample's estimate meets tol, and passes near q0."""
     tm = expand(arm, Q0, Y0, order=4, modes=(1, 2), design=[])
-    grid, plan = tm.evaluation_plan.grid, tm.evaluation_plan
+    grid, plan = tm._evaluation_plan.grid, tm._evaluation_plan
     rng = np.random.default_rng(5)
     passed = 0
     for scale in (0.01, 0.05, 0.2, 0.5, 1.0):

@@ -16,6 +16,7 @@ import pytest
 from conftest import UR5
 
 from pinflex.cases.benchmark_a import benchmark_model, benchmark_trajectory
+from pinflex.checks import check_y
 from pinflex.description import load
 from pinflex.erls import FlexibleModel
 from pinflex.erls.fidelity import refined
@@ -155,7 +156,7 @@ def test_order_by_tolerance_is_not_fooled_by_a_vanishing_next_order():
     from reference_fe import planar_two_link_frequencies
 
     arm = benchmark_model()
-    y0 = arm.check_y(None)
+    y0 = check_y(arm, None)
     q0 = np.array([0.7, 0.7])
     Q = q0 + np.c_[np.zeros(9), np.linspace(-0.4, 0.4, 9)]
     ref = np.array([planar_two_link_frequencies(q, *y0)[1][0] for q in Q])
@@ -193,7 +194,7 @@ def test_radius_check_warns_at_a_pose_with_vanishing_odd_terms(order):
     from pinflex.exceptions import TaylorRadiusWarning
 
     arm = benchmark_model()
-    y0 = arm.check_y(None)
+    y0 = check_y(arm, None)
     q0 = np.array([0.7, 0.7])
     Q = q0 + np.c_[np.zeros(9), np.linspace(-0.8, 0.8, 9)]
     ref = np.array([planar_two_link_frequencies(q, *y0)[1][0] for q in Q])

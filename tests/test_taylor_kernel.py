@@ -30,7 +30,7 @@ def arm():
 
 
 def _numpy_grid(tm, Q, quantity, linear, checked):
-    grid = tm.evaluation_plan.grid
+    grid = tm._evaluation_plan.grid
     run, _ = grid.new_scratch(Q.shape[0], checked, keep=False)
     return run(np.asarray(Q, dtype=float).T, grid.values[quantity, linear])
 
@@ -46,7 +46,7 @@ def _warned(tm, Q, **kw):
 def test_kernel_equals_the_numpy_grid_path(arm, order, modes):
     """Values to 1e-14 and τ² of the first screen equal the NumPy path's, any sample layout."""
     tm = expand(arm, Q0, order=order, modes=modes, design=[])
-    grid = tm.evaluation_plan.grid
+    grid = tm._evaluation_plan.grid
     kernel = taylor._grid_kernel()
     assert grid is not None and kernel is not None
     rng = np.random.default_rng(order + 10 * len(modes))
@@ -93,7 +93,7 @@ def test_kernel_decisions_equal_the_per_sample_estimate(arm):
 def test_kernel_screen_never_passes_a_non_finite_sample(arm, bad):
     """τ² is NaN when one offset is not finite; the checked call then refuses the sample."""
     tm = expand(arm, Q0, order=4, modes=(1,), design=[])
-    grid = tm.evaluation_plan.grid
+    grid = tm._evaluation_plan.grid
     Q = np.tile(Q0, (9, 1)) + 0.01
     Q[4, 1] = bad
     _, t2 = taylor._grid_kernel()(Q, grid.q0, grid.values["freq_hz", False], grid.form,
@@ -123,7 +123,7 @@ def test_other_models_keep_the_numpy_path(arm, case):
         tm = expand(arm, Q0, order=4, modes=(1, 2))
         Q = Q0 + 0.2 * np.random.default_rng(3).uniform(-1, 1, size=(17, 2))
         Y = None
-    assert tm.evaluation_plan.grid is None
+    assert tm._evaluation_plan.grid is None
     got = tm.evaluate(Q, Y, quantity="freq_hz", warn=False)
     ref = jets.evaluate(tm.space, tm.jet("freq_hz"), tm.offsets(Q, Y, warn=False))
     np.testing.assert_allclose(got, ref, rtol=1e-13, atol=0)

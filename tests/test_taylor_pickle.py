@@ -42,7 +42,7 @@ def test_a_taylor_model_round_trip_gives_the_same_values(arm):
         back.order_choice["order"] = 1  # read-only again
     assert not back.eigval_jets.flags.writeable
     # the loaded model evaluates on its own plan (rebuilt, with its own lock)
-    assert back.evaluation_plan is not tm.evaluation_plan
+    assert back._evaluation_plan is not tm._evaluation_plan
 
 
 def test_an_expansion_along_a_trajectory_round_trips(arm):

@@ -12,8 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex.assignment.targets import Target, target_matrix
-from pinflex.erls import FlexibleModel
-from pinflex.erls.model import add_design_masses
+from pinflex.checks import check_q
+from pinflex.erls import FlexibleModel, assembly, kinematics, modal
+from pinflex.erls.assembly import add_design_masses
 from pinflex.exceptions import ConfigurationError
 from pinflex.summaries import dataclass_summary
 from pinflex.trajectory import Trajectory
@@ -67,16 +68,16 @@ def exact_cost(model: FlexibleModel, trajectory: Trajectory, targets: Sequence[T
             frequencies.
         EigenSolverError: A design makes the eigenproblem singular or unrestrained.
     """
-    Q = model.check_q(trajectory.in_order(model.joint_names))
+    Q = check_q(model, trajectory.in_order(model.joint_names))
     ns = Q.shape[0]
     w = trajectory.trapezoid_weights()
-    M0, Md, K = model.assemble(model.pose_terms(Q), _batch(ns))
+    M0, Md, K = assembly.assemble(model, kinematics.pose_terms(model, Q), _batch(ns))
     tgt = target_matrix(targets, ns)
     nmax = max(t.mode for t in targets)
     costs, errs = np.empty(len(Y)), np.empty(len(Y))
     for i, y in enumerate(np.atleast_2d(Y)):
         M = add_design_masses(M0, Md, y)
-        lam = model.eigvals_from(M, K)[:, :nmax]
+        lam = modal.eigvals_from(model, M, K)[:, :nmax]
         f = np.sqrt(lam) / (2 * np.pi)
         cost, err = 0.0, 0.0
         for t, row in zip(targets, tgt):

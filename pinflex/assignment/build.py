@@ -17,6 +17,7 @@ import numpy as np
 from pinflex.assignment.points import PiecewiseTaylor
 from pinflex.assignment.problem import AssignmentQP, build_assignment_qp
 from pinflex.assignment.targets import Target, target_matrix
+from pinflex.checks import check_q, check_y
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
 from pinflex.parametric import TaylorModel, expand
@@ -88,13 +89,13 @@ def build_assignment(
         raise ConfigurationError("give at least one target")
     if quantity not in ("freq_hz", "eigval"):
         raise ConfigurationError(f"quantity='{quantity}': expected 'freq_hz' or 'eigval'")
-    Q = model.check_q(trajectory.in_order(model.joint_names))
+    Q = check_q(model, trajectory.in_order(model.joint_names))
     if Q.ndim != 2:
         raise ConfigurationError("the trajectory needs joint samples of shape (ns, nv)")
     ns = Q.shape[0]
     if q0 is None:
         q0 = Q[ns // 2]
-    y0 = model.check_y(y0)
+    y0 = check_y(model, y0)
     modes = []
     for m in [t.mode for t in targets] + [f[0] for f in floors] + [b[0] for b in bands]:
         if m not in modes:

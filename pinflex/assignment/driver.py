@@ -72,6 +72,7 @@ from pinflex.assignment.result import AssignmentResult, outcome
 from pinflex.assignment.solve import solve_assignment_qp
 from pinflex.assignment.targets import Target, check_trajectory_limits, target_matrix
 from pinflex.assignment.verify import Verification, floor_margins
+from pinflex.checks import check_q, check_y
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import (
     AssignmentInfeasible,
@@ -201,11 +202,11 @@ def assign_frequencies(
         raise ConfigurationError(f"targets must be a list of pinflex Target objects (mode, "
                                  f"frequency history), got {targets!r}"[:300])
     trajectory = in_model_order(model, trajectory)  # columns matched by joint name
-    Q = model.check_q(trajectory.q)
+    Q = check_q(model, trajectory.q)
     check_trajectory_limits(model, trajectory)
     if y_before is None:
         y_before = np.array([d.lower for d in model.design])
-    y_before = model.check_y(y_before)
+    y_before = check_y(model, y_before)
     modes: list[int] = []
     for m in [t.mode for t in targets] + list(report_modes):
         if m not in modes:

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from pinflex.checks import check_q
 from pinflex.exceptions import MissingDependency
 
 
@@ -197,7 +198,7 @@ def assignment_data(model, trajectory, result) -> AssignmentData:
     bands = list(settings.get("bands", []))
     budget = settings.get("mass_budget_kg")
     quantity = settings.get("quantity", "freq_hz")
-    Q = model.check_q(trajectory.in_order(model.joint_names))
+    Q = check_q(model, trajectory.in_order(model.joint_names))
     ns = Q.shape[0]
     modes = list(result.modes)
     for m in [f[0] for f in floors] + [b[0] for b in bands]:

@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pinflex.checks import check_q, check_y
 from pinflex.erls.design import design_mass
 from pinflex.exceptions import AssignmentWarning, ConfigurationError
 from pinflex.parametric import expand
@@ -127,7 +128,7 @@ def _section_limit_functions(model, full):
     from pinflex.sections import section_limits
 
     names = list(model.design_names)
-    links = [model.plan.beams[link].spec.inputs for link in model.design_links]
+    links = [model.plan.beams[link].spec.inputs for link in model.plan.design.links]
     if not any(inp.shape == "hollow_circle" for inp in links):
         return None
 
@@ -201,7 +202,7 @@ def size_for_floors(
         raise ConfigurationError(f"max_expansions = {max_expansions!r}: give a whole number >= 1")
     t_all = time.perf_counter()
     check_trajectory_limits(model, trajectory)
-    Q = np.atleast_2d(model.check_q(trajectory.in_order(model.joint_names)))
+    Q = np.atleast_2d(check_q(model, trajectory.in_order(model.joint_names)))
     floors = tuple((int(m), float(f)) for m, f in floors)
     if not floors:
         raise ConfigurationError("give at least one floor (mode, f_min_hz)")
@@ -213,7 +214,7 @@ def size_for_floors(
     didx = [model.design_names.index(n) for n in names]
     if not didx:
         raise ConfigurationError("the model has no design variable to size")
-    y = model.check_y(y_start).astype(float).copy()
+    y = check_y(model, y_start).astype(float).copy()
     y_start = y.copy()
     q0 = Q[len(Q) // 2] if q0 is None else np.asarray(q0, dtype=float)
     moving = [model.joint_names[j] for j in range(model.nv)

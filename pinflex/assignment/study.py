@@ -60,16 +60,17 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from typing import Any
 from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 
 from pinflex.assignment.driver import assign_frequencies
-from pinflex.assignment.targets import Target
 from pinflex.assignment.study_schema import check_against_model, check_study
+from pinflex.assignment.targets import Target
 from pinflex.cases.benchmark_a_path import benchmark_a_trajectory
+from pinflex.checks import check_y
 from pinflex.description.builtin import builtin_path
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError, StudyError
@@ -154,9 +155,7 @@ def load_config(path: str | Path) -> AssignmentConfig:
     names the robot does not have) is listed in one :class:`StudyError`; see
     :mod:`pinflex.assignment.study_schema`.
     """
-    from pinflex.description.source import read_text
-
-    from pinflex.description.source import input_path
+    from pinflex.description.source import input_path, read_text
     from pinflex.validation import load_toml
 
     path = input_path(path, "study file", StudyError)
@@ -310,7 +309,7 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
         if np.ndim(t.freq_hz) > 0 and n != traj.n_samples:
             raise StudyError(f"targets[{i}].freq_hz has {n} values; give one frequency or one "
                              f"per trajectory sample ({traj.n_samples})")
-    baseline = model.check_y(cfg.baseline) if cfg.baseline is not None else None
+    baseline = check_y(model, cfg.baseline) if cfg.baseline is not None else None
     loop: dict[str, Any] = {k: v for k, v in (("confirm_tol", cfg.confirm_tol), ("target_tol", cfg.target_tol),
                               ("max_refinements", cfg.max_refinements)) if v is not None}
     result = assign_frequencies(
@@ -318,7 +317,7 @@ def run_config(cfg: AssignmentConfig, *, model=None, trajectory=None, taylor=Non
         y_before=baseline, refine=cfg.refine, taylor=taylor, freq_before_hz=freq_before_hz,
         progress=progress,
         report_modes=[m for m in cfg.report_modes if m <= model.n_elastic],
-        q0=cfg.q0, y0=model.check_y(cfg.y0) if cfg.y0 is not None else None,
+        q0=cfg.q0, y0=check_y(model, cfg.y0) if cfg.y0 is not None else None,
         order=cfg.order, quantity=cfg.quantity, mass_budget_kg=cfg.mass_budget_kg,
         floors=cfg.floors, bands=cfg.bands, taylor_tol=cfg.taylor_tol,
         points_tol=cfg.points_tol, design=cfg.design, **loop,
@@ -346,6 +345,6 @@ def run_sizing(cfg: AssignmentConfig, *, model=None, trajectory=None, progress: 
     traj = cfg.build_trajectory(model) if trajectory is None else trajectory
     result = size_for_floors(
         model, traj, cfg.floors, design=cfg.design,
-        y_start=model.check_y(cfg.y0) if cfg.y0 is not None else None, q0=cfg.q0,
+        y_start=check_y(model, cfg.y0) if cfg.y0 is not None else None, q0=cfg.q0,
         order=cfg.order, mass_budget_kg=cfg.mass_budget_kg, progress=progress, **cfg.sizing)
     return model, traj, result

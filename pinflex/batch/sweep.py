@@ -42,6 +42,8 @@ from pathlib import Path
 import numpy as np
 
 from pinflex.batch.tasks import _error_text, _worker_address, config_hash
+from pinflex.checks import check_q, check_y
+from pinflex.erls import assembly, kinematics
 from pinflex.exceptions import InvalidSweep
 
 KIND = "assign"
@@ -359,23 +361,24 @@ class _SharedAssembly:
 
     def __init__(self, model, Q: np.ndarray):
         self._model, self._Q = model, np.array(Q, dtype=float)
-        terms = model.pose_terms(self._Q)
+        terms = kinematics.pose_terms(model, self._Q)
         from pinflex.erls import BatchAlgebra
 
-        self._M0, self._Md, self._K = model.assemble(terms, BatchAlgebra(self._Q.shape[0]))
+        self._M0, self._Md, self._K = assembly.assemble(model, terms,
+                                                        BatchAlgebra(self._Q.shape[0]))
 
     def __getattr__(self, name: str):
         return getattr(self._model, name)
 
     def matrices(self, Q, y=None, *, check_bounds: bool = True, data=None):
         """The model's ``matrices``, from the shared assembly on the group's poses."""
-        from pinflex.erls.model import add_design_masses
+        from pinflex.erls.assembly import add_design_masses
 
         model = self._model
         Qa = np.asarray(Q, dtype=float)
         if (Qa.shape == self._Q.shape and np.array_equal(Qa, self._Q)
-                and not model.design_channels):
-            yv = model.check_y(y, bounds=check_bounds)
+                and not model.plan.design.channels):
+            yv = check_y(model, y, bounds=check_bounds)
             if yv.ndim == 1:
                 return add_design_masses(self._M0, self._Md, yv), self._K
         return model.matrices(Q, y, check_bounds=check_bounds, data=data)
@@ -406,9 +409,9 @@ def run_assign_group(items: list) -> list[dict]:
     try:
         model = cfg0.build_model()
         traj = cfg0.build_trajectory(model)
-        Q = model.check_q(traj.q)
+        Q = check_q(model, traj.q)
         q0 = Q[Q.shape[0] // 2] if cfg0.q0 is None else cfg0.q0
-        y0 = model.check_y(cfg0.y0)
+        y0 = check_y(model, cfg0.y0)
         modes: list[int] = []
         for cfg, *_ in items:
             modes += [m for m in _needed_modes(cfg) if m not in modes]
@@ -425,7 +428,7 @@ def run_assign_group(items: list) -> list[dict]:
         row = _new_row(chash, case, overrides)
 
         def solve(cfg=cfg):
-            y_before = (model.check_y(cfg.baseline) if cfg.baseline is not None
+            y_before = (check_y(model, cfg.baseline) if cfg.baseline is not None
                         else np.array([d.lower for d in model.design]))
             case_modes: list[int] = []
             report = [m for m in cfg.report_modes if m <= model.n_elastic]

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pinflex.checks import check_q
 from pinflex.exceptions import ConfigurationError, OutputExists
 
 LUMPED_FORMATS = ("mjcf", "urdf")
@@ -106,7 +107,7 @@ def run(args: argparse.Namespace, fmt: str) -> int:
 
         poses = np.atleast_2d(trajectory_for(arm, Trajectory.from_csv(args.trajectory)))
     else:
-        poses = np.atleast_2d(arm.check_q(args.q if args.q is not None else np.zeros(arm.nv)))
+        poses = np.atleast_2d(check_q(arm, args.q if args.q is not None else np.zeros(arm.nv)))
     axial = (not arm.planar) if args.axial is None else bool(args.axial)
     layout = layout_of(arm, axial=axial)
     options = dict(poses=poses, n_modes=args.modes, max_fit_poses=args.fit_poses)

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from pinflex.checks import check_q
 from pinflex.dynamics.damping import Damping
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import held_rayleigh
@@ -86,7 +87,7 @@ def linear_pose(dyn, q, inputs, outputs, *, damping: Damping | None = None,
             f"joints {[n for n, _ in dyn.locked]} are locked in this model; joints='free' "
             "would free them: use joints='locked' (every joint held) or build the model with "
             "springs")
-    q = dyn.model.check_q(q).astype(float)
+    q = check_q(dyn.model, q).astype(float)
     M, _, K, _ = dyn.linear_terms(q)
     nx, nd = dyn.nx, dyn.ndof
     A = dyn.joint_offsets(q)[0]

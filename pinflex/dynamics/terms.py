@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from pinflex.checks import check_y
 from pinflex.dynamics.carriers import Carriers, build_carriers
 from pinflex.erls.plan import attachment
 from pinflex.erls.terms import joint_step, joint_step_rate
@@ -101,7 +102,7 @@ class ErlsDynamics:
             DesignVariableNotFound: A dict key of ``y`` is not a design variable.
             DesignVariableOutOfBounds: A design value leaves its bounds.
         """
-        y = model.check_y(y)
+        y = check_y(model, y)
         if y.ndim != 1:
             raise ConfigurationError("ErlsDynamics takes one design vector (ny,)")
         #: the model at design ``y`` (sections, materials, springs and masses from ``y``)
@@ -412,7 +413,8 @@ def design_model(model, y: np.ndarray):
 def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
     """Elastic twists of the link roots ``e_L`` (6, nx) in link axes and their rates.
 
-    Follows the unique-ERLS rule of the assembly (``FlexibleModel.root_twists``) at one pose:
+    Follows the unique-ERLS rule of the assembly
+    (:func:`pinflex.erls.kinematics.root_twists`) at one pose:
     a child root copies its parent attachment's elastic twist rotated into the child axes,
     minus the joint's motion subspace. The rates ``ė_L`` (k, 6, nx) come from the joints
     turning (or sliding) with the Pinocchio velocities in the columns of ``vrel`` (nv, k).

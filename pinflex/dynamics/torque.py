@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from pinflex.checks import check_q
 from pinflex.dynamics.damping import Damping, check_damping
 from pinflex.dynamics.integrators import NewmarkRun, newmark
 from pinflex.dynamics.motion import JointMotion
@@ -24,8 +25,8 @@ from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import held_rayleigh
 from pinflex.resources import check_series
-from pinflex.validation import require_number
 from pinflex.trajectory.samples import in_model_order
+from pinflex.validation import require_number
 
 
 def simulate_torque(
@@ -123,7 +124,7 @@ def simulate_torque(
             "(drive = 'prescribed', the trajectory constant in them)")
     nx, nv, nd = dyn.nx, dyn.nv, dyn.ndof
     Cm = dyn.model.coord_map
-    q0 = dyn.model.check_q(q0).astype(float)
+    q0 = check_q(dyn.model, q0).astype(float)
     z0 = np.concatenate([np.zeros(nx) if x0 is None else np.asarray(x0, float), q0])
     zd0 = np.concatenate([np.zeros(nx) if xd0 is None else np.asarray(xd0, float),
                           np.zeros(nv) if qd0 is None else np.asarray(qd0, float)])

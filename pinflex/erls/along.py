@@ -18,6 +18,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from pinflex.checks import check_q, check_y
 from pinflex.exceptions import ConfigurationError, InvalidTrajectory
 from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory
@@ -205,8 +206,8 @@ def trajectory_for(arm, traj: Trajectory) -> np.ndarray:
         InvalidTrajectory: Columns naming no joint, joints without a column, duplicates.
     """
     if not traj.named and traj.q.shape[1] == arm.model.nq != arm.nv:
-        return arm.check_q(traj.q)
-    return arm.check_q(traj.in_order(arm.joint_names))
+        return check_q(arm, traj.q)
+    return check_q(arm, traj.in_order(arm.joint_names))
 
 
 def modes_along(
@@ -276,7 +277,7 @@ def modes_along(
         }
         for e in tr.events
     )
-    yv = arm.check_y(y)
+    yv = check_y(arm, y)
     design = {d.name: float(v) for d, v in zip(arm.design, np.atleast_2d(yv)[0])}
     indicator = None
     if times.size >= 2:

@@ -10,13 +10,42 @@ from __future__ import annotations
 
 import numpy as np
 
+from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
-from pinflex.erls.terms import Algebra, PoseTerms, propagate_root_twists, twist_at, zeros_like
+from pinflex.erls.kinematics import root_twists
+from pinflex.erls.terms import Algebra, BatchAlgebra, PoseTerms, twist_at, zeros_like
 from pinflex.linalg import translate_twist
+
+__all__ = ["add_design_masses", "assemble", "matrices_from_terms", "root_twists"]
+
+
+def add_design_masses(M0: np.ndarray, Md: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``M = M0 + Σ_j y_j Md_j`` for one design (ny,) or one per pose (n, ny)."""
+    if Md.shape[0] == 0:
+        return M0
+    if y.ndim == 1:
+        return M0 + np.tensordot(y, Md, axes=(0, 0))
+    return M0 + np.einsum("nj,jnab->nab", y, Md)
 
 
 def assemble(model, terms: PoseTerms, alg: Algebra):
-    """``(M0, Mdesign, K)`` of :meth:`pinflex.erls.FlexibleModel.assemble`."""
+    """Assemble M without design masses, M per unit design mass, and K.
+
+    Works on any algebra ``alg`` (poses or Taylor coefficients on the leading axis).
+
+    Args:
+        model: The flexible model.
+        terms: Pose terms of ``b`` poses (:func:`pinflex.erls.kinematics.pose_terms`) or
+            their jets.
+        alg: The algebra of the leading axis (:class:`BatchAlgebra` for poses, a jet
+            algebra for Taylor coefficients).
+
+    Returns:
+        ``M0`` (b, nd, nd), ``Mdesign`` (ny, b, nd, nd), ``K`` (b, nd, nd) after the joint
+        conditions are applied, so ``nd = ndof`` (the modal coordinates ``[x; q_kept]``).
+        Units: mass entries [kg, kg m, kg m²], stiffness [N/m, N, N m] per coordinate
+        pair; ``Mdesign`` is per kg of each design mass.
+    """
     nx = model.nx
     nd = nx + model.nv  # [x; q_all]; joint conditions map to the modal coordinates
     twist = root_twists(model, terms, alg)
@@ -70,7 +99,21 @@ def assemble(model, terms: PoseTerms, alg: Algebra):
     return joint_conditions.apply(model, terms, alg, twist, M, Mdesign, Kfull)
 
 
-def root_twists(model, terms: PoseTerms, alg: Algebra) -> dict[str, np.ndarray | None]:
-    """``{link: (b, 6, nx) or None}`` of :meth:`pinflex.erls.FlexibleModel.root_twists`."""
-    return propagate_root_twists(model.plan, terms, alg,
-                                 lambda k, j, e: twist_at(alg, j.attach, e))
+def matrices_from_terms(model, terms: PoseTerms, y: np.ndarray, n_poses: int):
+    """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs.
+
+    Args:
+        model: The flexible model.
+        terms: Pose terms of the poses (:func:`pinflex.erls.kinematics.pose_terms`), leading
+            axis ``n_poses``.
+        y: Design values checked by :func:`pinflex.checks.check_y`, (ny,) or
+            (n_poses, ny) [kg].
+        n_poses: Number of poses on the leading axis.
+
+    Returns:
+        ``(M, K)``, each (n_poses, ndof, ndof), with the design masses and design
+        stiffness channels added.
+    """
+    M0, Md, K = assemble(model, terms, BatchAlgebra(n_poses))
+    M = add_design_masses(M0, Md, y)
+    return design_channels.add_to(model, terms, y, M, K, n_poses)

@@ -1,8 +1,8 @@
 """Design parameters that enter ``M`` and ``K`` nonlinearly: sections, materials, springs.
 
 Design point masses enter ``M`` linearly (``M = M0 + Σ y_j M_j``, see
-:meth:`FlexibleModel.assemble`). A design *parameter* of a flexible link's section or material
-changes the link's beam properties ``c = EA, GJ, EIy, EIz, ρA, ρIp``, each a nonlinear
+:func:`pinflex.erls.assembly.assemble`). A design *parameter* of a flexible link's section or
+material changes the link's beam properties ``c = EA, GJ, EIy, EIz, ρA, ρIp``, each a nonlinear
 function ``f_c(y)`` of the parameters (:mod:`pinflex.description.properties`). The link's
 beam matrices are linear in those properties, ``K_link = Σ_c f_c K_c``, ``M_link = Σ_c f_c
 M_c`` with constant unit matrices, so
@@ -26,7 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex import beam
+from pinflex.checks import check_y
 from pinflex.erls import joints as joint_conditions
+from pinflex.erls import kinematics
 from pinflex.exceptions import InvalidBeamProperty
 from pinflex.sections import CHANNELS, beam_properties, section_limits
 
@@ -163,7 +165,7 @@ def components(model, terms, alg, which=None) -> list[np.ndarray | None]:
     """
     if not model.plan.design.channels:
         return []
-    twist = model.root_twists(terms, alg)
+    twist = kinematics.root_twists(model, terms, alg)
     out: list[np.ndarray | None] = []
     full: list[np.ndarray | None] = []
     cache: dict = {}
@@ -248,7 +250,7 @@ def design_mass(model, y, *, order: int = 0):
     from pinflex.jets import JetSpace
     from pinflex.jets.scalar import Scalar, coefficients
 
-    y = model.check_y(y, bounds=False)
+    y = check_y(model, y, bounds=False)
     names = list(model.design_names)
     ny = len(names)
     if order and ny:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from pinflex.checks import check_y
 from pinflex.native.urdf import inertia_from_spatial
 
 
@@ -62,7 +63,7 @@ def effective_model(arm, y=None, *, point_masses: bool = True) -> pin.Model:
         add(body.link, pin.Inertia(body.mass, np.asarray(body.com), np.asarray(body.inertia)))
     if point_masses:
         values = dict(arm.point_mass_values)
-        yv = arm.check_y(y)
+        yv = check_y(arm, y)
         for d, v in zip(arm.design, np.atleast_1d(yv)):
             values[d.name] = float(v)
         for p in desc.point_masses:

@@ -11,6 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from pinflex.checks import check_q
+from pinflex.erls import kinematics
 from pinflex.exceptions import EigenSolverError
 
 
@@ -35,7 +37,7 @@ def eigenpairs(model, Q, y=None, *, n_modes: int | None = None, check_bounds: bo
     """
     from pinflex.erls.modal import cholesky_standard_form
 
-    Q = np.atleast_2d(model.check_q(Q))
+    Q = np.atleast_2d(check_q(model, Q))
     M, K = model.matrices(Q, y, check_bounds=check_bounds)
     Mred, Li, A = cholesky_standard_form(model, M, K)
     lam, Z = np.linalg.eigh(A)
@@ -69,7 +71,7 @@ class PoseMap:
 
     Args:
         model: A :class:`~pinflex.erls.FlexibleModel` the conditioned solve covers.
-        terms: Its pose terms (``model.pose_terms``) of the samples.
+        terms: Its pose terms (:func:`pinflex.erls.kinematics.pose_terms`) of the samples.
         ns: Number of samples.
     """
 
@@ -148,12 +150,12 @@ def solver_eigenpairs(model, Q, y, *, n_modes: int, one_pose: bool = False):
     ns = Q.shape[0]
     k = min(int(n_modes), model.nx)
     if one_pose:
-        terms = model.pose_terms(Q[:1])
+        terms = kinematics.pose_terms(model, Q[:1])
         M0, Md = solve.mass(model, terms, y, 1, split=True)
         Y = np.broadcast_to(y, (ns, model.ny))
         M = M0 + np.tensordot(Y, Md[:, 0], axes=1)  # point masses: linear in the design
     else:
-        terms = model.pose_terms(Q)
+        terms = kinematics.pose_terms(model, Q)
         M = solve.mass(model, terms, y, ns)
     B, _, _ = eigensolve.condense(model, M)
     mu, V = np.linalg.eigh(B)

@@ -43,7 +43,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.erls.terms import twist_at
+from pinflex.checks import check_q
+from pinflex.erls import kinematics
+from pinflex.erls.terms import BatchAlgebra, twist_at
 from pinflex.exceptions import ConfigurationError, InvalidBeamProperty, JointNotFound
 
 JOINT_SWITCHES = ("free", "locked", "annotated")
@@ -458,18 +460,16 @@ def damping_matrices(model, Q, data=None) -> np.ndarray:
     Returns:
         ``C`` (ndof, ndof) or (n, ndof, ndof) [N m s/rad, N s/m and the coupled units].
     """
-    from pinflex.erls.terms import BatchAlgebra
-
-    Q = model.check_q(Q)
+    Q = check_q(model, Q)
     single = Q.ndim == 1
     Qb = Q[None] if single else Q
     n = Qb.shape[0]
     lay = model.plan.conditions
     out = np.zeros((n, model.ndof, model.ndof))
     if lay.dampers:
-        terms = model.pose_terms(Qb, data=data)
+        terms = kinematics.pose_terms(model, Qb, data)
         alg = BatchAlgebra(n)
-        twist = model.root_twists(terms, alg)
+        twist = kinematics.root_twists(model, terms, alg)
         C = sum(c * _unit(model, terms, alg, twist, j) for j, c in lay.dampers)
         T = transform(model, terms, alg, twist)
         if T is not None:
@@ -487,3 +487,51 @@ def relative_motion_rows(model, terms, alg, twist) -> np.ndarray:
     if gx is None:
         return C[..., :0, :]
     return np.concatenate([-gx, C], axis=-1)
+
+
+def joint_transform(model, q) -> np.ndarray:
+    """``T`` (nx + nv, ndof): ``[x; q_all] = T [x; q_kept]`` at pose ``q``.
+
+    The identity when no joint is locked; the rows of a locked joint give its coordinate
+    as the parent attachment's elastic motion along the joint axis.
+
+    Args:
+        model: The flexible model.
+        q: Joint coordinates (nv,) of one pose in the user convention [rad or m].
+
+    Returns:
+        ``T`` (nx + nv, ndof), dimensionless.
+
+    Raises:
+        ConfigurationError: Invalid ``q`` or more than one pose.
+    """
+    T = transform(model, *one_pose_twists(model, q, "joint_transform()"))
+    return np.eye(model.ndof) if T is None else T[0]
+
+
+def one_pose_twists(model, q, what: str) -> tuple:
+    """``(terms, alg, twist)`` of one pose ``q`` (nv,), checked; ``what`` names the caller."""
+    q = check_q(model, q)
+    if q.ndim != 1:
+        raise ConfigurationError(f"{what} takes one pose")
+    terms = kinematics.pose_terms(model, q[None])
+    alg = BatchAlgebra(1)
+    return terms, alg, kinematics.root_twists(model, terms, alg)
+
+
+def full_shapes(model, q, shapes: np.ndarray) -> np.ndarray:
+    """Shapes over the modal coordinates (ndof, k) as ``[x; q_all]`` (nx + nv, k).
+
+    Args:
+        model: The flexible model.
+        q: Joint coordinates (nv,) of the pose the shapes belong to [rad or m].
+        shapes: Mode shapes (ndof, k) over the modal coordinates ``[x; q_kept]``.
+
+    Returns:
+        ``T shapes`` (nx + nv, k) (see :func:`joint_transform`); ``shapes`` itself when
+        every joint is free.
+
+    Raises:
+        ConfigurationError: Invalid ``q`` (only checked when some joint is not free).
+    """
+    return shapes if model.plan.conditions.plain else joint_transform(model, q) @ shapes

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pinflex.erls import eigensolve, joints, one_pose, solve, solve_conditions
+from pinflex.checks import check_q, check_y
+from pinflex.erls import assembly, eigensolve, joints, kinematics, one_pose, solve, solve_conditions
 from pinflex.erls.terms import BatchAlgebra
 from pinflex.exceptions import ConfigurationError, EigenSolverError
 from pinflex.linalg import rotate_twist
@@ -144,7 +145,7 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
     if not plain and not solve_conditions.covered(model):
         return _frequencies_nodal(model, Q, y, n_modes=n_modes, check_bounds=check_bounds,
                                   data=data)
-    y = model.check_y(y, bounds=check_bounds)  # Q: checked by FlexibleModel.frequencies
+    y = check_y(model, y, bounds=check_bounds)  # Q: checked by FlexibleModel.frequencies
     single = Q.ndim == 1
     Qb = Q[None] if single else Q
     if y.ndim == 2 and y.shape[0] != Qb.shape[0]:
@@ -153,10 +154,11 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
         )
     _check_n_modes(n_modes)
     if not plain:  # springs, locks, beam design: relative joint values
-        terms = model.pose_terms(Qb, data=data)
+        terms = kinematics.pose_terms(model, Qb, data=data)
 
         def pencil_c(i):  # nodal-coordinate pair of pose i, for high modes of extreme spectra
-            Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)
+            Mi, Ki = assembly.matrices_from_terms(model, _pose(terms, i),
+                                                  y if y.ndim == 1 else y[i], 1)
             return (*reduced(model, Mi[0], Ki[0]), Mi[0])
 
         P = solve_conditions.pencil(model, terms, y, Qb.shape[0], data)
@@ -164,21 +166,21 @@ def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=Tr
         return f[0] if single else f
     layout = one_pose.one_pose_layout(model, data) if single and y.ndim == 1 else None
     if layout is not None:  # one pose: one product S^T W S instead of the block assembly
-        terms = model.pose_terms_one(Q, data=data)
+        terms = kinematics.pose_terms_one(model, Q, data=data)
         twist = one_pose.root_twists_one(model, solve.solve_plan(model, data), terms, data)
         M = one_pose.mass_one(model, layout, terms, twist, y)[0]
 
         def pencil1():
-            Mi, Ki = model.matrices_from_terms(terms, y, 1)
+            Mi, Ki = assembly.matrices_from_terms(model, terms, y, 1)
             return (*reduced(model, Mi[0], Ki[0]), Mi[0])
 
         lam = eigensolve.eigvals_one(model, M, n_modes, pencil1)
         return np.sqrt(lam) / (2.0 * np.pi)
-    terms = model.pose_terms(Qb, data=data)
+    terms = kinematics.pose_terms(model, Qb, data=data)
     M = solve.mass(model, terms, y, Qb.shape[0], data=data)
 
     def pencil(i):  # nodal-coordinate pair of pose i, for high modes of extreme spectra
-        Mi, Ki = model.matrices_from_terms(_pose(terms, i), y if y.ndim == 1 else y[i], 1)
+        Mi, Ki = assembly.matrices_from_terms(model, _pose(terms, i), y if y.ndim == 1 else y[i], 1)
         return (*reduced(model, Mi[0], Ki[0]), Mi[0])
 
     lam = eigensolve.eigvals(model, M, n_modes, pencil)
@@ -208,7 +210,7 @@ def _frequencies_nodal(model, Q, y=None, *, n_modes: int | None = None, check_bo
         (k,) for one pose or (n, k).
     """
     M, K = model.matrices(Q, y, check_bounds=check_bounds, data=data)
-    lam = model.eigvals_from(M, K)
+    lam = eigvals_from(model, M, K)
     if n_modes is not None:
         lam = lam[..., :n_modes]
     return np.sqrt(lam) / (2.0 * np.pi)
@@ -261,14 +263,14 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
     plain = solve.supported(model)
     if not plain and not solve_conditions.covered(model):
         return _modes_nodal(model, q, y, n_modes=n_modes, check_bounds=check_bounds, data=data)
-    q = model.check_q(q)
+    q = check_q(model, q)
     if q.ndim != 1:
         raise ConfigurationError("modes() takes one pose; use frequencies() for many")
-    y = model.check_y(y, bounds=check_bounds)
+    y = check_y(model, y, bounds=check_bounds)
     _check_n_modes(n_modes)
     if not plain:  # springs, locks, beam design: relative joint values
         return _modes_conditions(model, q, y, n_modes, data)
-    terms, placements = model.pose_terms_and_placements(q, data=data)
+    terms, placements = kinematics.pose_terms_and_placements(model, q, data=data)
     plan = solve.solve_plan(model, data)
     twist = one_pose.root_twists_one(model, plan, terms, data)
     layout = one_pose.one_pose_layout(model, data) if y.ndim == 1 else None
@@ -278,7 +280,7 @@ def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
         M = solve.mass(model, terms, y, 1, data=data)[0]
 
     def pencil():
-        Mx, Kx = model.matrices_from_terms(terms, y, 1)
+        Mx, Kx = assembly.matrices_from_terms(model, terms, y, 1)
         return (*reduced(model, Mx[0], Kx[0]), Mx[0])
 
     lam, sw, sx = eigensolve.eigvecs(model, M, n_modes, pencil)
@@ -384,10 +386,10 @@ def _solver_fields(model, plan, twist, terms, placements, sw: np.ndarray):
 
 def _modes_conditions(model, q, y, n_modes, data) -> ModalResult:
     """:func:`modes` of a model with springs, locks or beam design (:mod:`.solve_conditions`)."""
-    terms = model.pose_terms(q[None], data=data)
+    terms = kinematics.pose_terms(model, q[None], data=data)
 
     def pencil():
-        Mx, Kx = model.matrices_from_terms(terms, y, 1)
+        Mx, Kx = assembly.matrices_from_terms(model, terms, y, 1)
         return (*reduced(model, Mx[0], Kx[0]), Mx[0])
 
     P = solve_conditions.pencil(model, terms, y, 1, data)
@@ -398,7 +400,7 @@ def _modes_conditions(model, q, y, n_modes, data) -> ModalResult:
     kept = nx + np.array([i for i, c in enumerate(conds) if c.kind != "locked"], dtype=int)
     shapes = eigensolve.to_nodal(model, twist, sw, data)[np.concatenate([np.arange(nx), kept])]
     if phie is not None:  # high modes from the nodal pencil
-        Mx, Kx = model.matrices_from_terms(terms, y, 1)
+        Mx, Kx = assembly.matrices_from_terms(model, terms, y, 1)
         shapes = np.concatenate([shapes, _nodal_shapes(model, Mx[0], Kx[0], phie)], axis=1)
     return _nodal_result(model, q, y, lam, shapes, terms, data)
 
@@ -422,12 +424,12 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     """Modes from the nodal-coordinate pencil (models the conditioned solve lacks)."""
     import scipy.linalg
 
-    q = model.check_q(q)
+    q = check_q(model, q)
     if q.ndim != 1:
         raise ConfigurationError("modes() takes one pose; use frequencies() for many")
-    y = model.check_y(y, bounds=check_bounds)
-    terms = model.pose_terms(q[None], data=data)
-    M, K = model.matrices_from_terms(terms, y, 1)
+    y = check_y(model, y, bounds=check_bounds)
+    terms = kinematics.pose_terms(model, q[None], data=data)
+    M, K = assembly.matrices_from_terms(model, terms, y, 1)
     M, K = M[0], K[0]
     Mred, Kxx = reduced(model, M, K)
     ne = model.n_elastic
@@ -452,8 +454,8 @@ def node_fields(model, q: np.ndarray, shapes: np.ndarray, terms=None, data=None)
     workspace (default: this thread's).
     """
     if terms is None:
-        terms = model.pose_terms(q[None], data=data)
-    twist = model.root_twists(terms, BatchAlgebra(1))
+        terms = kinematics.pose_terms(model, q[None], data=data)
+    twist = kinematics.root_twists(model, terms, BatchAlgebra(1))
     T = joints.transform(model, terms, BatchAlgebra(1), twist)
     if T is not None:  # locked joints: back to [x; q_all]
         shapes = T[0] @ shapes

@@ -32,26 +32,26 @@ from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
 
-from pinflex.description import NAMESPACE, RobotDescription, load
+from pinflex.checks import check_n_modes, check_q, check_y
+from pinflex.description import RobotDescription, load
 from pinflex.description.crosscheck import (
     check_pinocchio_reading,
     native_stderr,
     urdfdom_message,
 )
-from pinflex.erls import assembly, kinematics, modal
 from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
+from pinflex.erls import kinematics, modal
+from pinflex.erls.assembly import matrices_from_terms
+from pinflex.erls.kinematics import NodePlacement
 from pinflex.erls.plan import build_plan, coordinate_map
 from pinflex.erls.terms import (
-    BatchAlgebra,
     DesignVariable,
     ModelPlan,
-    PoseTerms,
 )
 from pinflex.erls.workspace import FlexibleData, ThreadWorkspaces, check_data
 from pinflex.exceptions import (
@@ -60,32 +60,10 @@ from pinflex.exceptions import (
     DesignVariableOutOfBounds,
     ImmutableModelError,
     InvalidDescription,
-    NoFlexibleLink,
 )
 from pinflex.linalg import skew
 from pinflex.resources import check_modal, check_model_size
-from pinflex.validation import require_array, require_count
-
-
-class NodePlacement(NamedTuple):
-    """World placement of a beam's nodes at one pose.
-
-    Attributes:
-        positions_m: Node positions (N+1, 3) in the world frame [m].
-        rotation: Rotation (3, 3) of the beam axes in the world frame.
-    """
-
-    positions_m: np.ndarray
-    rotation: np.ndarray
-
-
-def add_design_masses(M0: np.ndarray, Md: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``M = M0 + Σ_j y_j Md_j`` for one design (ny,) or one per pose (n, ny)."""
-    if Md.shape[0] == 0:
-        return M0
-    if y.ndim == 1:
-        return M0 + np.tensordot(y, Md, axes=(0, 0))
-    return M0 + np.einsum("nj,jnab->nab", y, Md)
+from pinflex.validation import require_array
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
@@ -109,7 +87,7 @@ def _checked_mass(description: RobotDescription, design: tuple, name: str, value
 
 
 def _rodrigues_constants(model) -> tuple:
-    """Constants of :meth:`FlexibleModel.pose_terms`.
+    """Constants of :func:`pinflex.erls.kinematics.pose_terms`.
 
     The revolute joints' names, user columns and ``R_o``, ``R_o K``, ``R_o K^2`` (K the axis'
     cross-product matrix) stacked (nj, 3, 3), and whether the coordinate map is the identity.
@@ -144,17 +122,43 @@ def _placement_constants(plan: ModelPlan) -> tuple:
     return tuple(rows)
 
 
-#: What ``dir(model)`` lists and the documentation describes: the queries, construction and
-#: the model's joint and design attributes. The other methods (pose checks, assembly terms,
-#: root twists, ...) serve pinflex's own layers.
+#: The public surface of :class:`FlexibleModel`, all of it (tests/test_api_surface.py):
+#: the model's data (as ``pinocchio.Model``'s attributes), construction and the queries the
+#: documentation describes. What pinflex's own layers run on a model lives, as Pinocchio's
+#: algorithms, in free functions of the module that owns it: :mod:`pinflex.checks`
+#: (``check_q``, ``check_y``, ``check_n_modes``), :mod:`pinflex.erls.kinematics`
+#: (``pose_terms``, ``pose_terms_one``, ``pose_terms_and_placements``, ``root_twists``),
+#: :mod:`pinflex.erls.assembly` (``assemble``, ``matrices_from_terms``) and
+#: :mod:`pinflex.erls.joints` (``full_shapes``).
 PUBLIC = (
     "model", "description", "plan", "nv", "nx", "ny", "ndof", "n_elastic", "n_rigid", "planar",
-    "plane_normal", "coordinates", "joint_names", "joint_conditions", "joint_switch",
-    "joint_labels", "kept_joints", "design", "design_names", "y0", "point_mass_values",
-    "frequencies", "modes", "matrices", "node_placements", "effective_inertias",
-    "effective_model", "pin_configuration", "from_configuration", "from_pinocchio",
-    "with_values", "create_data", "workspace",
+    "plane_normal", "coordinates", "coord_map", "joint_names", "joint_index", "x_names",
+    "joint_conditions", "joint_switch", "joint_labels", "kept_joints", "design", "design_names",
+    "y0", "point_mass_values", "frequencies", "modes", "matrices", "joint_damping",
+    "relative_motion_rows", "joint_transform", "eigvals_from", "node_placements",
+    "effective_inertias", "effective_model", "pin_configuration", "from_configuration",
+    "from_pinocchio", "with_values", "create_data", "workspace",
 )
+
+#: Former methods of :class:`FlexibleModel` and where they live now (named in the
+#: AttributeError an old call raises).
+MOVED = {
+    "check_q": "pinflex.checks.check_q(model, q)",
+    "check_y": "pinflex.checks.check_y(model, y, bounds=...)",
+    "check_n_modes": "pinflex.checks.check_n_modes(model, n_modes)",
+    "pose_terms": "pinflex.erls.kinematics.pose_terms(model, Q, data)",
+    "pose_terms_one": "pinflex.erls.kinematics.pose_terms_one(model, q, data)",
+    "pose_terms_and_placements":
+        "pinflex.erls.kinematics.pose_terms_and_placements(model, q, data)",
+    "root_twists": "pinflex.erls.kinematics.root_twists(model, terms, alg)",
+    "assemble": "pinflex.erls.assembly.assemble(model, terms, alg)",
+    "matrices_from_terms": "pinflex.erls.assembly.matrices_from_terms(model, terms, y, n)",
+    "full_shapes": "pinflex.erls.joints.full_shapes(model, q, shapes)",
+    "pin_q": "model.coord_map @ q",
+    "design_channels": "model.plan.design.channels",
+    "design_links": "model.plan.design.links",
+    "set_value": "model = model.with_values(name=value)",
+}
 
 
 class FlexibleModel:
@@ -333,15 +337,22 @@ class FlexibleModel:
         """Refused: the model is constant."""
         raise ImmutableModelError(f"FlexibleModel is constant once built: cannot delete '{name}'")
 
+    def __getattr__(self, name: str):
+        """Only reached for a missing attribute: name where a former method lives now."""
+        if name == "set_value":  # ImmutableModelError is an AttributeError
+            raise ImmutableModelError(f"FlexibleModel is constant once built: set_value is gone; "
+                                      f"use {MOVED[name]}, which returns a new model")
+        if name in MOVED:
+            raise AttributeError(f"FlexibleModel has no attribute '{name}': use {MOVED[name]}",
+                                 name=name, obj=self)
+        raise AttributeError(f"'FlexibleModel' object has no attribute '{name}'", name=name,
+                             obj=self)
+
     def __repr__(self) -> str:
         """Robot, dof, flexible links, joint conditions and design, in a few lines."""
         from pinflex.summaries import model_summary
 
         return model_summary(self)
-
-    def __dir__(self) -> list[str]:
-        """The public surface (:data:`PUBLIC`); the methods other layers call stay callable."""
-        return sorted(set(PUBLIC) | {n for n in object.__dir__(self) if n.startswith("_")})
 
     def __getstate__(self) -> dict:
         """State for pickling (the per-thread workspaces stay behind)."""
@@ -386,17 +397,6 @@ class FlexibleModel:
         return FlexibleModel(description, planar=self.planar, values=masses,
                              coordinates=self.coordinates, joints=self._joints_arg,
                              _reuse=None if params else self)
-
-    def set_value(self, name: str, value: float) -> None:
-        """Removed: the model is constant; use ``model = model.with_values(name=value)``.
-
-        Raises:
-            ImmutableModelError: Always.
-        """
-        raise ImmutableModelError(
-            f"FlexibleModel is constant once built: set_value('{name}', ...) is gone; use "
-            f"model = model.with_values({{'{name}': {value!r}}}), which returns a new model"
-        )
 
     def create_data(self) -> FlexibleData:
         """A new workspace of this model (for ``data=``), as ``pinocchio.Model.createData``."""
@@ -485,16 +485,6 @@ class FlexibleModel:
         return MappingProxyType(self._pm_values)
 
     @property
-    def design_channels(self) -> tuple:
-        """Design-dependent mass and stiffness channels (:mod:`pinflex.erls.design`), read-only."""
-        return self.plan.design.channels
-
-    @property
-    def design_links(self) -> tuple[str, ...]:
-        """Flexible links whose section or material depends on design parameters."""
-        return self.plan.design.links
-
-    @property
     def plane_normal(self) -> np.ndarray | None:
         """World normal (3,) of the plane of a planar model, None otherwise."""
         return self.plan.plane_normal
@@ -511,58 +501,10 @@ class FlexibleModel:
             ``{link: NodePlacement}`` for every flexible link, in plan order: node positions
             (N+1, 3) [m] and the rotation (3, 3) of the beam axes, both in the world frame.
         """
-        q = self.check_q(q)
+        q = check_q(self, q)
         pdata = self.workspace(data).pin
         pin.framesForwardKinematics(self.model, pdata, self.pin_configuration(q))
-        return self._placements(pdata)
-
-    def _placements(self, data) -> dict[str, NodePlacement]:
-        """Node placements from Pinocchio ``data`` whose frame placements are up to date."""
-        out = {}
-        oMf, ids = data.oMf, self.plan.frame_ids
-        for link, nodes_h, axes in self._placement_constants:
-            H = oMf[ids[link]].homogeneous[:3]  # [R | p]
-            out[link] = NodePlacement(nodes_h @ H.T, H[:, :3] @ axes)
-        return out
-
-    def pose_terms_and_placements(
-        self, q: np.ndarray, *, data: FlexibleData | None = None
-    ) -> tuple[PoseTerms, dict[str, NodePlacement]]:
-        """:meth:`pose_terms` and :meth:`node_placements` of one checked pose (nv,).
-
-        One kinematics pass serves both (the frame placements follow from the joint placements
-        the Jacobians were computed with).
-
-        Args:
-            q: Joint coordinates (nv,) in the user convention [rad or m], already checked by
-                :meth:`check_q` (not validated again).
-            data: Workspace (default: this thread's).
-
-        Returns:
-            ``(terms, placements)``: :class:`PoseTerms` with leading axis 1 and
-            ``{link: NodePlacement}`` as :meth:`node_placements`.
-        """
-        ws = self.workspace(data)
-        if not self.nv:
-            return self.pose_terms(q[None], data=ws), self.node_placements(q, data=ws)
-        terms = self.pose_terms_one(q, data=ws)
-        pin.updateFramePlacements(self.model, ws.pin)
-        return terms, self._placements(ws.pin)
-
-    def pose_terms_one(self, q: np.ndarray, *, data: FlexibleData | None = None) -> PoseTerms:
-        """:meth:`pose_terms` of one checked pose (nv,), leading axis 1, without the batch loop.
-
-        Leaves the workspace's Pinocchio data at this pose (joint placements and Jacobians).
-
-        Args:
-            q: Joint coordinates (nv,) in the user convention [rad or m], already checked.
-            data: Workspace (default: this thread's).
-
-        Returns:
-            :class:`PoseTerms`: ``jac`` ``{link: (1, 6, nv)}``, ``rot`` ``{joint: (1, 3, 3)}``,
-            ``slide`` ``{prismatic joint: (1, 3)}`` [m].
-        """
-        return kinematics.pose_terms_one(self, q, self.workspace(data))
+        return kinematics.placements(self, pdata)
 
     @property
     def design_names(self) -> tuple[str, ...]:
@@ -578,36 +520,6 @@ class FlexibleModel:
     def ny(self) -> int:
         """Number of design variables."""
         return len(self.design)
-
-    def check_q(self, q) -> np.ndarray:
-        """Validate joint coordinates and return them as user coordinates (nv,) or (n, nv).
-
-        Accepts one value per moving joint (length ``nv``, the user convention) or a Pinocchio
-        configuration vector (length ``nq``, which differs from ``nv`` when the arm has
-        continuous joints, stored as ``(cos θ, sin θ)``); see :meth:`from_configuration`.
-
-        Args:
-            q: One pose (nv,) or many (n, nv) in the user convention [rad or m], or Pinocchio
-                configurations (nq,) or (n, nq) when ``nq != nv``.
-
-        Returns:
-            Float array (nv,) or (n, nv) of user coordinates [rad or m].
-
-        Raises:
-            ConfigurationError: Not numbers, non-finite values, or a wrong shape.
-        """
-        q = require_array(q, "joint values q")
-        if q.ndim in (1, 2) and q.shape[-1] == self.model.nq != self.nv:
-            return self.from_configuration(q)
-        if q.shape[-1:] != (self.nv,) or q.ndim not in (1, 2):
-            extra = f" or a Pinocchio configuration of {self.model.nq}" if (
-                self.model.nq != self.nv
-            ) else ""
-            raise ConfigurationError(
-                f"expected {self.nv} joint values ({', '.join(self.joint_names)}){extra} per "
-                f"pose, got an array of shape {q.shape}"
-            )
-        return q  # finite: require_array checked it
 
     def from_configuration(self, qpin) -> np.ndarray:
         """User coordinates (nv,) or (n, nv) of Pinocchio configuration vectors (nq,) or (n, nq).
@@ -650,44 +562,6 @@ class FlexibleModel:
                 qrel[..., jm.idx_v] = qpin[..., jm.idx_q]
         return np.linalg.solve(self.coord_map, qrel[..., None])[..., 0]
 
-    def check_y(self, y, *, bounds: bool = True) -> np.ndarray:
-        """Validate design values (ny,) or per-pose (n, ny); ``None`` gives the nominal ones.
-
-        Args:
-            y: Design values [kg] (ny,) or (n, ny), a ``{name: value}`` dict (missing names
-                take their nominal values), or ``None`` for :attr:`y0`.
-            bounds: Check every value against its design bounds (tolerance 1e-12).
-
-        Returns:
-            Float array (ny,) or (n, ny) [kg].
-
-        Raises:
-            DesignVariableNotFound: A dict key is not a design variable.
-            ConfigurationError: Not numbers, non-finite values, or a wrong shape.
-            DesignVariableOutOfBounds: ``bounds`` is set and a value leaves its bounds.
-        """
-        if y is None:
-            return self.y0
-        if isinstance(y, dict):
-            unknown = set(y) - set(self.design_names)
-            if unknown:
-                raise DesignVariableNotFound(sorted(unknown)[0], self.design_names)
-            y = [y.get(d.name, d.nominal) for d in self.design]
-        y = require_array(y, "design values y")
-        if y.shape[-1:] != (self.ny,) or y.ndim not in (1, 2):
-            raise ConfigurationError(
-                f"expected {self.ny} design values ({', '.join(self.design_names)}), "
-                f"got shape {y.shape}"
-            )
-        if not np.all(np.isfinite(y)):
-            raise ConfigurationError("design values must be finite")
-        if bounds:
-            for d, v in zip(self.design, np.atleast_2d(y).T):
-                bad = (v < d.lower - 1e-12) | (v > d.upper + 1e-12)
-                if np.any(bad):
-                    raise DesignVariableOutOfBounds(d.name, float(v[bad][0]), d.lower, d.upper)
-        return y
-
     def joint_index(self, name: str) -> int:
         """Index of a moving joint in the coordinate vector.
 
@@ -706,17 +580,6 @@ class FlexibleModel:
             raise JointNotFound(name, self.joint_names)
         return self.joint_names.index(name)
 
-    def pin_q(self, q: np.ndarray) -> np.ndarray:
-        """Pinocchio joint values (nv,) of user coordinates (relative angles).
-
-        Args:
-            q: User coordinates (nv,) of one pose [rad or m]; not validated.
-
-        Returns:
-            Relative (Pinocchio) joint values ``C q`` (nv,) [rad or m].
-        """
-        return self.coord_map @ q
-
     def pin_configuration(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio configuration vector (nq,) of user coordinates.
 
@@ -726,7 +589,7 @@ class FlexibleModel:
         Returns:
             Configuration (nq,) in Pinocchio's order, continuous joints as ``(cos θ, sin θ)``.
         """
-        return self._configuration_of(self.pin_q(np.asarray(q, dtype=float)))
+        return self._configuration_of(self.coord_map @ np.asarray(q, dtype=float))
 
     def _configuration_of(self, qv: np.ndarray) -> np.ndarray:
         """Pinocchio configuration vector (nq,) of Pinocchio joint values (nv,)."""
@@ -742,53 +605,7 @@ class FlexibleModel:
                 out[jm.idx_q] = v
         return out
 
-    # ------------------------------------------------------------------ assembly
-    def pose_terms(self, Q: np.ndarray, *, data: FlexibleData | None = None) -> PoseTerms:
-        """Pinocchio Jacobians and joint rotations at poses Q (n, nv).
-
-        Args:
-            Q: Checked joint coordinates (n, nv) in the user convention [rad or m]; not
-                validated (use :meth:`check_q` first).
-            data: Workspace (default: this thread's).
-
-        Returns:
-            :class:`PoseTerms`: ``jac`` ``{carrier link: (n, 6, nv)}`` LOCAL frame Jacobians
-            over the user coordinates, ``rot`` ``{revolute joint: (n, 3, 3)}`` child-in-parent
-            rotations, ``slide`` ``{prismatic joint: (n, 3)}`` child origin offsets [m].
-        """
-        return kinematics.pose_terms(self, Q, self.workspace(data))
-
-    def assemble(self, terms: PoseTerms, alg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Assemble M without design masses, M per unit design mass, and K.
-
-        Works on any algebra ``alg`` (poses or Taylor coefficients on the leading axis).
-
-        Args:
-            terms: Pose terms of ``b`` poses (:meth:`pose_terms`) or their jets.
-            alg: The algebra of the leading axis (:class:`BatchAlgebra` for poses, a jet
-                algebra for Taylor coefficients).
-
-        Returns:
-            ``M0`` (b, nd, nd), ``Mdesign`` (ny, b, nd, nd), ``K`` (b, nd, nd) after the joint
-            conditions are applied, so ``nd = ndof`` (the modal coordinates ``[x; q_kept]``).
-            Units: mass entries [kg, kg m, kg m²], stiffness [N/m, N, N m] per coordinate
-            pair; ``Mdesign`` is per kg of each design mass.
-        """
-        return assembly.assemble(self, terms, alg)
-
-    def root_twists(self, terms: PoseTerms, alg) -> dict[str, np.ndarray | None]:
-        """Elastic twist of every link root in link axes.
-
-        Args:
-            terms: Pose terms of ``b`` poses (:meth:`pose_terms`) or their jets.
-            alg: The algebra of the leading axis (:class:`BatchAlgebra` for poses).
-
-        Returns:
-            ``{link: (b, 6, nx) array}``, or None for a link whose root does not move
-            elastically; linear in the elastic coordinates ``x``.
-        """
-        return assembly.root_twists(self, terms, alg)
-
+    # ------------------------------------------------------------------ matrices
     def matrices(self, Q, y=None, *, check_bounds: bool = True,
                  data: FlexibleData | None = None):
         """Mass and stiffness matrices at one pose (nv,) or many (n, nv).
@@ -802,15 +619,15 @@ class FlexibleModel:
         Returns:
             ``(M, K)``, each (ndof, ndof) for one pose or (n, ndof, ndof).
         """
-        Q = self.check_q(Q)
-        y = self.check_y(y, bounds=check_bounds)
+        Q = check_q(self, Q)
+        y = check_y(self, y, bounds=check_bounds)
         single = Q.ndim == 1
         Qb = Q[None] if single else Q
         if y.ndim == 2 and y.shape[0] != Qb.shape[0]:
             raise ConfigurationError(
                 f"got {y.shape[0]} design vectors for {Qb.shape[0]} poses; give one or one per pose"
             )
-        M, K = self.matrices_from_terms(self.pose_terms(Qb, data=data), y, Qb.shape[0])
+        M, K = matrices_from_terms(self, kinematics.pose_terms(self, Qb, data), y, Qb.shape[0])
         return (M[0], K[0]) if single else (M, K)
 
     def joint_damping(self, Q, *, data: FlexibleData | None = None) -> np.ndarray:
@@ -827,22 +644,6 @@ class FlexibleModel:
             ``C`` (ndof, ndof) or (n, ndof, ndof) [N m s/rad, N s/m and the coupled units].
         """
         return joint_conditions.damping_matrices(self, Q, data=data)
-
-    def matrices_from_terms(self, terms: PoseTerms, y: np.ndarray, n_poses: int):
-        """Batched ``(M, K)`` from the pose terms of ``n_poses`` poses and checked designs.
-
-        Args:
-            terms: Pose terms of the poses (:meth:`pose_terms`), leading axis ``n_poses``.
-            y: Design values checked by :meth:`check_y`, (ny,) or (n_poses, ny) [kg].
-            n_poses: Number of poses on the leading axis.
-
-        Returns:
-            ``(M, K)``, each (n_poses, ndof, ndof), with the design masses and design
-            stiffness channels added.
-        """
-        M0, Md, K = self.assemble(terms, BatchAlgebra(n_poses))
-        M = add_design_masses(M0, Md, y)
-        return design_channels.add_to(self, terms, y, M, K, n_poses)
 
     # ------------------------------------------------------------------ joint conditions
     @property
@@ -883,7 +684,8 @@ class FlexibleModel:
         """``T`` (nx + nv, ndof): ``[x; q_all] = T [x; q_kept]`` at pose ``q``.
 
         The identity when no joint is locked; the rows of a locked joint give its coordinate
-        as the parent attachment's elastic motion along the joint axis.
+        as the parent attachment's elastic motion along the joint axis
+        (:func:`pinflex.erls.joints.joint_transform`).
 
         Args:
             q: Joint coordinates (nv,) of one pose in the user convention [rad or m].
@@ -894,29 +696,7 @@ class FlexibleModel:
         Raises:
             ConfigurationError: Invalid ``q`` or more than one pose.
         """
-        q = self.check_q(q)
-        if q.ndim != 1:
-            raise ConfigurationError("joint_transform() takes one pose")
-        terms = self.pose_terms(q[None])
-        alg = BatchAlgebra(1)
-        T = joint_conditions.transform(self, terms, alg, self.root_twists(terms, alg))
-        return np.eye(self.ndof) if T is None else T[0]
-
-    def full_shapes(self, q, shapes: np.ndarray) -> np.ndarray:
-        """Shapes over the modal coordinates (ndof, k) as ``[x; q_all]`` (nx + nv, k).
-
-        Args:
-            q: Joint coordinates (nv,) of the pose the shapes belong to [rad or m].
-            shapes: Mode shapes (ndof, k) over the modal coordinates ``[x; q_kept]``.
-
-        Returns:
-            ``T shapes`` (nx + nv, k) (see :meth:`joint_transform`); ``shapes`` itself when
-            every joint is free.
-
-        Raises:
-            ConfigurationError: Invalid ``q`` (only checked when some joint is not free).
-        """
-        return shapes if self.plan.conditions.plain else self.joint_transform(q) @ shapes
+        return joint_conditions.joint_transform(self, q)
 
     def relative_motion_rows(self, q) -> np.ndarray:
         """``G`` (nv, nx + nv): the joints' physical relative motion ``r = G [x; q_all]``.
@@ -933,13 +713,8 @@ class FlexibleModel:
         Raises:
             ConfigurationError: Invalid ``q`` or more than one pose.
         """
-        q = self.check_q(q)
-        if q.ndim != 1:
-            raise ConfigurationError("relative_motion_rows() takes one pose")
-        terms = self.pose_terms(q[None])
-        alg = BatchAlgebra(1)
-        return joint_conditions.relative_motion_rows(self, terms, alg,
-                                                     self.root_twists(terms, alg))[0]
+        return joint_conditions.relative_motion_rows(
+            self, *joint_conditions.one_pose_twists(self, q, "relative_motion_rows()"))[0]
 
     # ------------------------------------------------------------------ modal analysis
     def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True,
@@ -963,8 +738,8 @@ class FlexibleModel:
         Returns:
             Frequencies [Hz], (k,) or (n, k).
         """
-        n_modes = self.check_n_modes(n_modes)
-        Q = self.check_q(Q)
+        n_modes = check_n_modes(self, n_modes)
+        Q = check_q(self, Q)
         check_modal(self.ndof, 1 if Q.ndim == 1 else Q.shape[0], "frequencies()")
         return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds,
                                  data=self.workspace(data))
@@ -1013,7 +788,7 @@ class FlexibleModel:
             ConfigurationError: Wrong number of joint values or several poses.
             EigenSolverError: Singular mass matrix or an unrestrained structure.
         """
-        n_modes = self.check_n_modes(n_modes)
+        n_modes = check_n_modes(self, n_modes)
         if y is not None and not isinstance(y, dict):
             y = require_array(y, "design values y")
             if y.ndim == 2 and y.shape[0] == 1:
@@ -1025,28 +800,3 @@ class FlexibleModel:
                 )
         return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds,
                            data=self.workspace(data))
-
-    def check_n_modes(self, n_modes):
-        """``n_modes`` checked: None, or an int >= 1 (capped at the number of modes).
-
-        Args:
-            n_modes: Requested number of lowest modes, or None for all.
-
-        Returns:
-            None, or ``min(n_modes, n_elastic)``.
-
-        Raises:
-            NoFlexibleLink: The model has no non-rigid mode (no beam and no joint spring).
-            ConfigurationError: ``n_modes`` is not an integer >= 1 (0, -1, 2.5, True, "3").
-        """
-        if self.n_elastic == 0:
-            raise NoFlexibleLink(
-                f"robot '{self.description.name}' has no flexible link (nor joint spring), so "
-                "no elastic modes: "
-                f"declare one with <pinflex:flexible link=... elements=...> in the namespace "
-                f"{NAMESPACE} (links: {', '.join(self.description.links)})"
-            )
-        if n_modes is None:
-            return None
-        n = require_count(n_modes, "n_modes", minimum=1)
-        return min(n, self.n_elastic)

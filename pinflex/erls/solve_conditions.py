@@ -81,7 +81,7 @@ def link_blocks(model, data=None) -> dict:
 def _build_link_blocks(model, data) -> dict:
     plan = solve.solve_plan(model, data)
     out: dict = {}
-    for n, ch in enumerate(model.design_channels):
+    for n, ch in enumerate(model.plan.design.channels):
         if ch.name == "stiffness":
             continue
         core = plan.cores[ch.owner]
@@ -201,7 +201,7 @@ def _design_terms(model, plan, terms, y, b, alg, twists, sources, M, data):
     """
     khat: dict = {}
     k_design: dict = {}
-    channels = model.design_channels
+    channels = model.plan.design.channels
     if not channels:
         return M, khat, k_design
     names = [d.name for d in model.design]

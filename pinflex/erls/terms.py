@@ -270,7 +270,7 @@ class Algebra(Protocol):
 class BatchAlgebra:
     """Plain arrays with a leading pose axis (the :class:`Algebra` of poses)."""
 
-    const_at = slice(None)
+    const_at: int | slice = slice(None)
 
     def __init__(self, size: int):
         """Algebra of arrays with ``size`` poses on the leading axis.

@@ -82,6 +82,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from pinflex.checks import check_q, check_y
 from pinflex.erls.eigenpairs import PoseMap, eigenpairs, solver_eigenpairs
 from pinflex.exceptions import ConfigurationError
 from pinflex.progress import ProgressBar
@@ -483,9 +484,9 @@ def track_modes(
         A :class:`ModeTracking`; ``sorted_eigvals`` holds the lowest ``max(modes) + extra``
         modes.
     """
-    Q = np.atleast_2d(model.check_q(Q))
+    Q = np.atleast_2d(check_q(model, Q))
     ns = Q.shape[0]
-    Y = model.check_y(y, bounds=check_bounds)
+    Y = check_y(model, y, bounds=check_bounds)
     Yb = np.broadcast_to(Y, (ns, model.ny)) if Y.ndim == 1 else Y
     if Yb.shape[0] != ns:
         raise ConfigurationError(f"got {Yb.shape[0]} design vectors for {ns} samples")
@@ -516,9 +517,9 @@ def track_modes(
             raise ConfigurationError(f"reference sample {start} is not in 0..{ns - 1}")
     elif reference is not None:
         q0, y0 = reference
-        q0 = model.check_q(q0)
+        q0 = check_q(model, q0)
         start = int(np.argmin(np.linalg.norm(Q - q0, axis=1)))
-        y0 = Yb[start] if y0 is None else model.check_y(y0, bounds=check_bounds)
+        y0 = Yb[start] if y0 is None else check_y(model, y0, bounds=check_bounds)
         start_shapes = _lead_in(model, Q, Yb, start, q0, y0, n, mac_min, check_bounds, solver)
         if start_shapes is None:  # the lead-in left the conditioned solve: all nodal
             if coordinates == "solver":
@@ -607,7 +608,7 @@ def _lead_in(model, Q, Y, start, q0, y0, n, mac_min, check_bounds, solver):
     if one_pose:
         Qp[:] = qs
     if solver:
-        Yp = model.check_y(Yp, bounds=check_bounds)
+        Yp = check_y(model, Yp, bounds=check_bounds)
     pairs = _pairs(model, Qp, Yp, n, check_bounds, solver, one_pose)
     if pairs is None:
         return None

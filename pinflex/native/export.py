@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
+from pinflex.checks import check_q, check_y
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import held_rayleigh
 from pinflex.validation import require_array, require_number
@@ -123,8 +124,8 @@ def linear_model(arm, q, y=None, *, zeta: float = 0.0, rayleigh=None,
     if torque_input not in ("motor", "generalized"):
         raise ConfigurationError(f"torque_input = {torque_input!r}: choose 'motor' (the "
                                  "actuator on both bodies of the joint) or 'generalized'")
-    Q = arm.check_q(q)
-    yv = arm.check_y(y)
+    Q = check_q(arm, q)
+    yv = check_y(arm, y)
     poses = [_one_pose(arm, qk, yv, zeta, rayleigh, torque_input) for qk in np.atleast_2d(Q)]
     out = {k: (poses[0][k] if Q.ndim == 1 else np.stack([p[k] for p in poses]))
            for k in poses[0]}

@@ -1,7 +1,7 @@
 """Parametric modal model: exact Taylor expansion of eigenvalues in pose and design.
 
 Paper 000 eq. (3)–(9). The Taylor coefficients of ``M(q, y)`` and ``K(q, y)`` come from the
-same ERLS assembly as the exact model (:meth:`pinflex.erls.FlexibleModel.assemble`), run in
+same ERLS assembly as the exact model (:func:`pinflex.erls.assembly.assemble`), run in
 truncated Taylor arithmetic (:mod:`pinflex.jets`) instead of on numbers: the joint
 kinematics are propagated down the URDF tree as jets (a revolute joint's rotation is the
 exact series of ``I + sin θ [a]× + (1 − cos θ) [a]×²``, a prismatic joint's offset is linear),

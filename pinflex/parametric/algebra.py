@@ -22,7 +22,7 @@ class JetAlgebra:
     jets is the truncated Cauchy product.
     """
 
-    const_at = 0
+    const_at: int | slice = 0
 
     def __init__(self, space: JetSpace):
         """Algebra of the jets of ``space``.

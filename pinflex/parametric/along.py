@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pinflex import jets
+from pinflex.checks import check_q, check_y
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
@@ -155,8 +156,8 @@ def expand_along(model: FlexibleModel, Q, y=None, *, tol: float = 1e-3, modes=(1
     """
     if criterion not in ("exact", "estimate"):
         raise ConfigurationError(f"criterion={criterion!r}: expected 'exact' or 'estimate'")
-    Q = model.check_q(Q)
-    y = model.check_y(y)
+    Q = check_q(model, Q)
+    y = check_y(model, y)
     modes = tuple(int(m) for m in np.atleast_1d(modes))
     f = model.frequencies(Q, y, n_modes=max(modes))[:, [m - 1 for m in modes]]
     exact = f if quantity == "freq_hz" else (2 * np.pi * f) ** 2

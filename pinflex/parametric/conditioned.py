@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pinflex.erls import FlexibleModel, eigensolve, solve
+from pinflex.erls import FlexibleModel, eigensolve, kinematics, solve
 from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
 from pinflex.parametric import solver_design
@@ -64,7 +64,7 @@ def _mass_jets(model: FlexibleModel, q0, y0, joint_idx, design_idx, order: int,
         Mq, Mdq = solve.mass(model, terms, y0, 1, alg=alg, split=True)
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:
-        terms = model.pose_terms(q0[None])
+        terms = kinematics.pose_terms(model, q0[None])
         Mq, Mdq = solve.mass(model, terms, y0, 1, split=True)
         alphas = [()]
     if pose is not None:

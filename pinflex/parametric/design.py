@@ -86,7 +86,7 @@ def add_jets(model, space: JetSpace, terms, alg, joint_idx, design_idx, y0, M, K
         M: Jet of M, (ncoef, ndof, ndof), modified copy returned.
         K: Jet of K, likewise.
     """
-    if not model.design_channels:
+    if not model.plan.design.channels:
         return M, K
     nj, nd = len(joint_idx), len(design_idx)
     f, f0 = channel_jets(model, space.order, y0, design_idx)
@@ -103,7 +103,7 @@ def add_jets(model, space: JetSpace, terms, alg, joint_idx, design_idx, y0, M, K
         return M, K
     comps = erls_design.components(model, terms, alg, which)
     M, K = np.array(M, copy=True), np.array(K, copy=True)
-    for ch, fc, C in zip(model.design_channels, f, comps):
+    for ch, fc, C in zip(model.plan.design.channels, f, comps):
         if C is None:
             continue
         contrib = C[ia] * fc[ib][:, None, None]

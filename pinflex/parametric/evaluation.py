@@ -154,18 +154,18 @@ class EvaluationPlan:
         direct = not tm.design_idx and tuple(tm.joint_idx) == tuple(range(nq))
         q0_col = np.ascontiguousarray(tm.q0[:, None]) if direct else None
         values = {key: _readonly(np.ascontiguousarray(c.T))
-                  for key, c in tm.coefficient_matrices.items()}
+                  for key, c in tm._coefficient_matrices.items()}
         checked: dict[tuple[str, bool], np.ndarray] = {}
         off = space.degree_offsets
         j0 = max(1, (p + 1) // 2)
         orders = sorted(set(range(j0, p + 1)) | {p - 1} - {0}) if p >= 1 else []
-        W = tm.spectral_weights
+        W = tm._spectral_weights
         w = 0 if W is None else W.shape[1] // k
         groups = len(orders) + w
         root = tuple((g, 1.0 / j) for g, j in enumerate(orders) if j >= j0)
         spec = tuple(range(len(orders), groups))
         for (quantity, linear), value in values.items():
-            full = tm.coefficient_matrices[quantity, False]
+            full = tm._coefficient_matrices[quantity, False]
             c0 = np.abs(full[0])
             if (p < 2 or not np.all(c0 > 1e-250) or not np.all(np.isfinite(full))
                     or (W is not None and not np.all(np.isfinite(W)))):

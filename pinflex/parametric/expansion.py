@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.linalg as sla
 
+from pinflex.checks import check_n_modes, check_y
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import (
     ConfigurationError,
@@ -25,7 +26,7 @@ def expand_at_order(model: FlexibleModel, q0, y0=None, *, order: int = 4,
                     design: Sequence[str] | None = None) -> TaylorModel:
     """:func:`pinflex.parametric.expand` at a given order (arguments and result as there)."""
     if model.n_elastic == 0:
-        model.check_n_modes(None)  # raises NoFlexibleLink, naming the robot
+        check_n_modes(model, None)  # raises NoFlexibleLink, naming the robot
     raw = [modes] if isinstance(modes, int | np.integer | str) else list(np.ravel(modes))
     if not raw or any(isinstance(m, bool | str | np.bool_)
                       or not isinstance(m, int | np.integer | float | np.floating)
@@ -65,7 +66,7 @@ def expand_at_order(model: FlexibleModel, q0, y0=None, *, order: int = 4,
     return TaylorModel(
         space=space,
         q0=np.asarray(q0, dtype=float),
-        y0=model.check_y(y0),
+        y0=check_y(model, y0),
         modes=modes,
         joint_idx=tuple(jidx),
         design_idx=tuple(didx),

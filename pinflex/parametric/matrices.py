@@ -7,7 +7,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from pinflex import jets
-from pinflex.erls import BatchAlgebra, FlexibleModel, PoseTerms
+from pinflex.checks import check_q, check_y
+from pinflex.erls import BatchAlgebra, FlexibleModel, PoseTerms, assembly, kinematics
 from pinflex.exceptions import ConfigurationError, DesignVariableNotFound
 from pinflex.jets import JetSpace
 from pinflex.linalg import axis_rotation, skew
@@ -103,10 +104,10 @@ def expansion_variables(model: FlexibleModel, q0, y0, order: int,
         ConfigurationError: For several poses, no variable, or an order out of range.
         DesignVariableNotFound: For an unknown design name.
     """
-    q0 = model.check_q(q0).astype(float)
+    q0 = check_q(model, q0).astype(float)
     if q0.ndim != 1:
         raise ConfigurationError("the expansion point must be a single pose")
-    y0 = model.check_y(y0)
+    y0 = check_y(model, y0)
     joint_idx = [model.joint_index(n) for n in (model.joint_names if joints is None else joints)]
     names = model.design_names if design is None else tuple(design)
     design_idx = []
@@ -147,11 +148,11 @@ def matrix_jets(model: FlexibleModel, q0, y0=None, *, order: int = 4,
         qspace = JetSpace(nj, int(order))
         terms = pose_jets(model, qspace, q0, {j: k for k, j in enumerate(joint_idx)})
         qalg: JetAlgebra | BatchAlgebra = JetAlgebra(qspace)
-        Mq, Mdq, Kq = model.assemble(terms, qalg)
+        Mq, Mdq, Kq = assembly.assemble(model, terms, qalg)
         alphas = [tuple(a) for a in qspace.multi_indices.tolist()]
     else:
-        terms, qalg = model.pose_terms(q0[None]), BatchAlgebra(1)
-        Mq, Mdq, Kq = model.assemble(terms, qalg)
+        terms, qalg = kinematics.pose_terms(model, q0[None]), BatchAlgebra(1)
+        Mq, Mdq, Kq = assembly.assemble(model, terms, qalg)
         alphas = [()]
     zeros = (0,) * nd
     emb = np.array([space.index[a + zeros] for a in alphas])

@@ -91,7 +91,7 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
     plan = solve.solve_plan(model)
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
-    channels = model.design_channels
+    channels = model.plan.design.channels
     locks = bool(model.plan.conditions.locked_joints)
     armatures = model.plan.conditions.armatures
     if not channels and not model.plan.conditions.spring_joints and not locks and not armatures:

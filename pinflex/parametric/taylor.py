@@ -53,16 +53,13 @@ class TaylorModel:
             mode numbers count the non-rigid modes under these conditions.
         order_choice: How the order was picked when :func:`expand` got a ``tol``:
             ``{"tol", "order", "estimate", "estimates", "method"}`` (None otherwise).
-        coefficient_matrices: ``{(quantity, linear_in_design): (ncoef, k)}`` coefficients of
-            the four polynomials :meth:`evaluate` uses (derived).
-        degree_blocks: ``{quantity: (ncoef, k·(p+1) + k)}``: per mode one column per degree
-            holding that degree's coefficients only, then the full coefficients (derived).
-        spectral_weights: ``(nvars, k·w)`` rates ``2 (∇λ_j − ∇λ_i) / |λ_j − λ_i|`` of each
-            mode against its spectral neighbours, or None without a spectrum (derived).
 
     A Taylor model never changes after construction: every array is a read-only copy, and
-    the derived fields are computed once, when it is built. It pickles (process pools, Dask
-    batches): only the defining fields are stored, the derived ones are rebuilt on loading.
+    the derived fields (private: the coefficient matrices :meth:`coefficients` returns, the
+    per-degree blocks of the error estimate, the spectral neighbours' rates of the radius
+    check and the evaluation plan) are computed once, when it is built. It pickles (process
+    pools, Dask batches): only the defining fields are stored, the derived ones are rebuilt
+    on loading.
     Unpickling runs code named in the file (that is how pickle works, not a pinflex choice):
     load pickled models only from files you trust.
     """
@@ -80,11 +77,11 @@ class TaylorModel:
     spectrum_slopes: np.ndarray | None = None
     joints: dict[str, str] | None = None
     order_choice: Mapping[str, object] | None = None
-    coefficient_matrices: Mapping[tuple[str, bool], np.ndarray] = field(
+    _coefficient_matrices: Mapping[tuple[str, bool], np.ndarray] = field(
         init=False, repr=False, compare=False)
-    degree_blocks: Mapping[str, np.ndarray] = field(init=False, repr=False, compare=False)
-    spectral_weights: np.ndarray | None = field(init=False, repr=False, compare=False)
-    evaluation_plan: EvaluationPlan = field(init=False, repr=False, compare=False)
+    _degree_blocks: Mapping[str, np.ndarray] = field(init=False, repr=False, compare=False)
+    _spectral_weights: np.ndarray | None = field(init=False, repr=False, compare=False)
+    _evaluation_plan: EvaluationPlan = field(init=False, repr=False, compare=False)
 
     def __repr__(self) -> str:
         return taylor_summary(self)  # order, variables, modes, radius: no array dumps
@@ -113,11 +110,11 @@ class TaylorModel:
                     B[off[d]:off[d + 1], c * (p + 1) + d] = full[off[d]:off[d + 1], c]
             B[:, k * (p + 1):] = full
             blocks[quantity] = _readonly(B)
-        object.__setattr__(self, "coefficient_matrices", MappingProxyType(coef))
-        object.__setattr__(self, "degree_blocks", MappingProxyType(blocks))
+        object.__setattr__(self, "_coefficient_matrices", MappingProxyType(coef))
+        object.__setattr__(self, "_degree_blocks", MappingProxyType(blocks))
         W = spectral_weights(self.modes, self.spectrum, self.spectrum_slopes)
-        object.__setattr__(self, "spectral_weights", None if W is None else _readonly(W))
-        object.__setattr__(self, "evaluation_plan", EvaluationPlan.build(self))
+        object.__setattr__(self, "_spectral_weights", None if W is None else _readonly(W))
+        object.__setattr__(self, "_evaluation_plan", EvaluationPlan.build(self))
 
     def __reduce__(self):
         """Pickle the defining fields only (for process pools, Dask, files).
@@ -264,10 +261,10 @@ class TaylorModel:
         dx = np.atleast_2d(np.asarray(dx, dtype=float))
         if mon is None:
             mon = jets.monomials(self.space, dx)
-        return self._estimate_from(dx, mon @ self.degree_blocks[quantity])[:2]
+        return self._estimate_from(dx, mon @ self._degree_blocks[quantity])[:2]
 
     def _estimate_from(self, dx: np.ndarray, con: np.ndarray):
-        """(estimate, ratio, value) from ``mon @ degree_blocks[quantity]``."""
+        """(estimate, ratio, value) from ``mon @ _degree_blocks[quantity]``."""
         p, k = self.order, len(self.modes)
         n = dx.shape[0]
         value = con[:, k * (p + 1):]
@@ -280,7 +277,7 @@ class TaylorModel:
             rho = r.max(axis=2)
         else:
             rho = np.zeros((n, k))
-        W = self.spectral_weights
+        W = self._spectral_weights
         if W is not None:  # twice the meeting rate: half the meeting distance
             np.maximum(rho, np.abs(dx @ W).reshape(n, k, -1).max(axis=2), out=rho)
         tail = np.maximum(a[:, :, p], rho * a[:, :, p - 1]) if p >= 1 else rho * c0
@@ -299,7 +296,7 @@ class TaylorModel:
 
     def _spectral_radius(self, rays: np.ndarray) -> np.ndarray:
         """Distance along unit rays (n, nvars) at which the nearest eigenvalue would meet."""
-        return meeting_distance(self.spectral_weights, rays, len(self.modes))
+        return meeting_distance(self._spectral_weights, rays, len(self.modes))
 
     def check_radius(self, dx: np.ndarray, tol: float = RADIUS_TOL, *,
                      quantity: str = "eigval", mon: np.ndarray | None = None,
@@ -387,7 +384,7 @@ class TaylorModel:
         if isinstance(tol, bool) or not isinstance(tol, int | float | np.number) or \
                 not tol > 0.0:  # inf: no tolerance; NaN refused
             raise ConfigurationError(f"tol must be a positive number, got {tol!r}")
-        plan = self.evaluation_plan
+        plan = self._evaluation_plan
         grid = plan.grid
         if grid is not None and Y is None:
             # one or two joints, all expanded, no design (see PowerGrid)
@@ -455,7 +452,7 @@ class TaylorModel:
 
     def _grid_checked(self, value, t2, P, Qa, quantity, linear, strict, tol):
         """The radius check of a :class:`PowerGrid` evaluation (``t2``: largest τ²)."""
-        plan = self.evaluation_plan
+        plan = self._evaluation_plan
         grid = plan.grid
         key = (quantity, bool(linear))
         # screen 1: the largest A-norm of the offsets against the norm at which the bound
@@ -473,7 +470,7 @@ class TaylorModel:
 
     def _finish(self, rows, dx, Qa, Y, key, warn, strict, tol):
         """Values from the monomial rows (ncoef, n), with the radius check when asked."""
-        plan = self.evaluation_plan
+        plan = self._evaluation_plan
         if not (warn or strict) or not rows.shape[1]:  # (no sample: nothing to judge)
             return (plan.values[key] @ rows).T
         checked = plan.checked.get(key)
@@ -498,7 +495,7 @@ class TaylorModel:
         if mon is None:
             mon = monomial_rows(self.space, dx.T).T
         quantity, linear = key
-        est, ratio, value = self._estimate_from(dx, mon @ self.degree_blocks[quantity])
+        est, ratio, value = self._estimate_from(dx, mon @ self._degree_blocks[quantity])
         self._report(est, ratio, tol, strict, stacklevel=5)
         if linear:
             return mon @ self.coefficients(quantity, linear_in_design=True)
@@ -513,7 +510,7 @@ class TaylorModel:
             linear_in_design: The partially linear polynomial λ̂ of eq. (7) instead of λ^p.
         """
         self.jet(quantity)  # checks the name
-        return self.coefficient_matrices[quantity, bool(linear_in_design)]
+        return self._coefficient_matrices[quantity, bool(linear_in_design)]
 
     @property
     def design_vars(self) -> list[int]:

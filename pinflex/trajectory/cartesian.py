@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from pinflex.checks import check_q
 from pinflex.exceptions import IKNotConverged, InvalidPath, LinkNotFound, TrajectoryWarning
 from pinflex.progress import ProgressBar
 from pinflex.trajectory import Trajectory, solve_ik
@@ -171,7 +172,7 @@ def path_trajectory(
         raise LinkNotFound(frame, [f.name for f in model.frames])
     fid = model.getFrameId(frame)
     times, pts = sample_polyline(waypoints, n_samples, duration_s, profile)
-    q0 = np.zeros(arm.nv) if q_init is None else arm.check_q(q_init)
+    q0 = np.zeros(arm.nv) if q_init is None else check_q(arm, q_init)
     qpin0 = arm.pin_configuration(q0)
     if orientation is None:
         qpin = np.array(solve_ik(model, data, fid, pts, qpin0, tol_m=tol, progress=progress).q)
@@ -194,7 +195,7 @@ def path_trajectory(
     for j in range(1, model.njoints):
         if model.joints[j].nq == 2:
             v = model.joints[j].idx_v
-            col = np.unwrap(np.concatenate([[arm.pin_q(q0)[v]], rel[:, v]]))[1:]
+            col = np.unwrap(np.concatenate([[(arm.coord_map @ q0)[v]], rel[:, v]]))[1:]
             rel[:, v] = col
     q = np.linalg.solve(arm.coord_map, rel.T).T
     traj = Trajectory(times, q, arm.joint_names, name)
@@ -259,7 +260,7 @@ def frame_position(arm, frame: str, q) -> np.ndarray:
     if not model.existFrame(frame):
         raise LinkNotFound(frame, [f.name for f in model.frames])
     data = model.createData()
-    pin.framesForwardKinematics(model, data, arm.pin_configuration(arm.check_q(q)))
+    pin.framesForwardKinematics(model, data, arm.pin_configuration(check_q(arm, q)))
     return data.oMf[model.getFrameId(frame)].translation.copy()
 
 
@@ -285,7 +286,7 @@ def path_from_spec(arm, spec: dict, *, name: str | None = None,
     for key in ("frame", "waypoints"):
         if key not in spec:
             raise InvalidPath(f"a path needs '{key}'")
-    q0 = np.zeros(arm.nv) if spec.get("start_q") is None else arm.check_q(spec["start_q"])
+    q0 = np.zeros(arm.nv) if spec.get("start_q") is None else check_q(arm, spec["start_q"])
     pts = np.asarray(spec["waypoints"], dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise InvalidPath(f"waypoints must be a list of [x, y, z], got shape {pts.shape}")

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from pinflex.checks import check_q
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
 from pinflex.progress import ProgressBar
@@ -240,7 +241,7 @@ def modes_preview(
     Returns:
         A :class:`ModesPreview` (``write_html`` for the offline page).
     """
-    q = np.zeros(model.nv) if q is None else model.check_q(q)
+    q = np.zeros(model.nv) if q is None else check_q(model, q)
     if modes is None:
         modes = min(model.n_elastic, 8)
     mode_list = list(range(1, int(modes) + 1)) if np.ndim(modes) == 0 else [int(m) for m in modes]

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from pinflex.erls.joints import joint_transform
 from pinflex.erls.modal import ModalResult, node_fields
 from pinflex.exceptions import ConfigurationError
 from pinflex.visualization import shapes
@@ -59,7 +60,7 @@ def simulation_playback(
         A = dyn.joint_offsets(q)[0]
         sh = np.concatenate([sim.x[i], A @ sim.x[i]])[:, None]
         if sh.shape[0] != model.ndof:  # locked joints: to the solver coordinates [x; q_kept]
-            sh = np.linalg.lstsq(model.joint_transform(q), sh, rcond=None)[0]
+            sh = np.linalg.lstsq(joint_transform(model, q), sh, rcond=None)[0]
         pos, motion, elastic = node_fields(model, q, sh)
         res = ModalResult(q=q, y=dyn.y, ndof=model.ndof, rigid_modes=model.nv,
                           eigvals=np.ones(1), shapes=sh, node_positions=pos,

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from pinflex.checks import check_q
 from pinflex.erls import FlexibleModel
 from pinflex.exceptions import ConfigurationError
 from pinflex.progress import ProgressBar
@@ -116,7 +117,7 @@ def mode_preview(
         The preview; ``info`` holds ``freq_hz``, ``scale`` (the factor on the mass-normalised
         mode) and ``amplitude_m``.
     """
-    q = np.zeros(model.nv) if q is None else model.check_q(q)
+    q = np.zeros(model.nv) if q is None else check_q(model, q)
     if int(mode) != mode or not 1 <= mode <= model.n_elastic:
         raise ConfigurationError(
             f"mode {mode!r} does not exist: the model has elastic modes 1..{model.n_elastic}"
@@ -191,7 +192,7 @@ def trajectory_preview(
         The preview; ``info`` holds ``freq_hz`` (n,), ``low_hz`` and ``high_hz``.
     """
     times = np.asarray(times_s, dtype=float).ravel()
-    Q = model.check_q(Q)
+    Q = check_q(model, Q)
     if Q.ndim != 2 or Q.shape[0] != times.size or times.size < 2:
         raise ConfigurationError(
             f"a trajectory needs n >= 2 times and (n, {model.nv}) poses; got {times.size} times "

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from pinflex.checks import check_q, check_y
 from pinflex.erls import FlexibleModel, ModalResult
 from pinflex.exceptions import InvalidDescription, PinflexWarning
 from pinflex.visualization import shapes
@@ -145,8 +146,8 @@ class RobotDrawing:
                  stations_per_element: int = 8, ghosts: bool = True):
         self.writer = writer
         self.model = model
-        self.q = model.check_q(q)
-        self.y = model.check_y(y)
+        self.q = check_q(model, q)
+        self.y = check_y(model, y)
         self.spe = int(stations_per_element)
         self.ghosts = bool(ghosts)
         self.rest = pose_state(model, self.q, self.spe)

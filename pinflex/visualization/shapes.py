@@ -22,7 +22,9 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex import beam
-from pinflex.erls import BatchAlgebra, FlexibleModel, ModalResult
+from pinflex.checks import check_q
+from pinflex.erls import BatchAlgebra, FlexibleModel, ModalResult, kinematics
+from pinflex.erls.joints import full_shapes
 from pinflex.exceptions import ConfigurationError
 
 
@@ -149,11 +151,11 @@ def link_twists(model: FlexibleModel, q: np.ndarray, shapes: np.ndarray) -> dict
         Per link a (k, 6) array ``(δp, θ)``: translation of the link origin and rotation of the
         link, both in link axes (Pinocchio's LOCAL convention).
     """
-    q = model.check_q(q)
+    q = check_q(model, q)
     nx = model.nx
-    shapes = model.full_shapes(q, shapes)  # locked joints' coordinates back in
-    terms = model.pose_terms(q[None])
-    roots = model.root_twists(terms, BatchAlgebra(1))
+    shapes = full_shapes(model, q, shapes)  # locked joints' coordinates back in
+    terms = kinematics.pose_terms(model, q[None])
+    roots = kinematics.root_twists(model, terms, BatchAlgebra(1))
     data = model.model.createData()
     pin.computeJointJacobians(model.model, data, model.pin_configuration(q))
     pin.updateFramePlacements(model.model, data)
