@@ -130,7 +130,7 @@ def parent_rows(model, plan, alg, twists, sources, joints) -> np.ndarray:
         if tau is None:
             continue
         a = joint.R_o @ joint.axis  # the joint axis in parent link axes
-        part = tau[:, 3:] if joint.kind == "revolute" else tau[:, :3]
+        part = tau[:, joint.motion.rows]  # rotation (revolute) or translation (prismatic)
         out[:, row] = np.einsum("i,lix->lx", a, part)
     return out
 
