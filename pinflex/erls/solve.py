@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex import beam
-from pinflex.erls.terms import BatchAlgebra, joint_step, propagate_root_twists
+from pinflex.erls.terms import BatchAlgebra, carrier_rows, joint_step, propagate_root_twists
 from pinflex.exceptions import EigenSolverError
 from pinflex.linalg import rotate_twist, translate_twist
 
@@ -385,20 +385,15 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
             D = D + mm(np.swapaxes(GT, -1, -2), W @ GJ)
         comp[key] = (C, D)
 
-    def on_beam(link, att, gJ, rows):
-        """Motion rows ``g`` (lead, rows, nd) of a point on a beam: the section's elastic
-        twist there (its own coordinates and the root twist, explicit) and ``gJ`` on q."""
+    def on_beam(link, att, xyz, rows):
+        """Motion rows ``g`` (lead, rows, nd) of a point on a beam (:func:`carrier_rows`):
+        the section's elastic twist there (own coordinates and root twist, explicit)."""
         e = None if twists[link] is None else explicit_twist(twists[link], sources, alg)
         e_full = None
         if e is not None:
             e_full = np.zeros((lead, 6, nx))
             e_full[:, :, : e.shape[-1]] = e
-        tau = attach_twist(att, e_full, alg, nx)
-        g = np.zeros((lead, rows, nd))
-        if tau is not None:
-            g[:, :, :nx] = tau[:, :rows]
-        g[:, :, nx:] = gJ
-        return g
+        return carrier_rows(attach_twist(att, e_full, alg, nx), terms.jac[link], xyz, rows, nx)
 
     for link, inertia in model.plan.inertias.items():
         add_rigid(-1, link, None, terms.jac[link], inertia)
@@ -420,15 +415,15 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
             if value == 0.0:
                 continue
         target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
-        gJ = (translate_twist(xyz) @ terms.jac[link])[:, :3]
         W = value * eye3 if np.ndim(value) == 0 else value
         if link in plan.cores:  # on a beam: its own coordinates and the root twist, explicit
-            g = on_beam(link, att, gJ, 3)
+            g = on_beam(link, att, xyz, 3)
             target += mm(np.swapaxes(g, -1, -2), W @ g)
         else:
+            gJ = (translate_twist(xyz) @ terms.jac[link])[:, :3]
             add_rigid(slot, link, translate_twist(xyz)[:3], gJ, W)
     for body, att in zip(model.plan.bodies, plan.body_attach):  # on beams: six twist rows
-        g = on_beam(body.link, att, translate_twist(body.xyz) @ terms.jac[body.link], 6)
+        g = on_beam(body.link, att, body.xyz, 6)
         M += mm(np.swapaxes(g, -1, -2), body.inertia @ g)
     for (k, slot), (C, D) in comp.items():
         target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split

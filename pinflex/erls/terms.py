@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from pinflex.description import FlexibleLink
-from pinflex.linalg import axis_rotation, rotate_twist, skew
+from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
 
 if TYPE_CHECKING:
     from pinflex.erls.design import DesignLayout
@@ -507,6 +507,31 @@ def joint_step_rate(j: JointPlan, rot=None, rate=None) -> np.ndarray | None:
         ``d step / dt`` per rate (k, 6, 6), or None for a fixed joint.
     """
     return j.motion.step_rate(j, rot, rate)
+
+
+def carrier_rows(tau, jac: np.ndarray, xyz: np.ndarray, rows: int, nx: int) -> np.ndarray:
+    """Motion of a point or body carried by a link, over the coordinates ``[x; q]``.
+
+    The one map of a carrier's velocity for both mass routes (nodal and solver coordinates):
+    the first ``rows`` rows (3: a point mass's velocity, 6: a rigid body's twist) of its
+    elastic twist ``tau`` on the elastic coordinates, and of ``X(xyz) J`` on the joint
+    coordinates, ``J`` the link's frame Jacobian and ``X`` the transport to the point.
+
+    Args:
+        tau: Elastic twist at the point (lead, 6, nx) (link axes), or None where it is zero.
+        jac: Frame Jacobian of the link (lead, 6, nv).
+        xyz: The point in the link frame (3,) [m].
+        rows: 3 or 6.
+        nx: Number of elastic coordinates.
+
+    Returns:
+        ``g`` (lead, rows, nx + nv).
+    """
+    g = np.zeros(jac.shape[:-2] + (rows, nx + jac.shape[-1]))
+    if tau is not None:
+        g[..., :nx] = tau[..., :rows, :]
+    g[..., nx:] = (translate_twist(xyz) @ jac)[..., :rows, :]
+    return g
 
 
 def zeros_like(jac: np.ndarray, nx: int) -> np.ndarray:
