@@ -18,8 +18,10 @@ from pinflex.linalg import translate_twist
 def _one_pose_joints(model, plan: SolvePlan, data=None) -> tuple:
     """Per joint, the constants :func:`root_twists_one` uses (cached per workspace, read-only).
 
-    ``(const, needed)``: the attachment's constant part placed on all ``nx`` columns (6, nx)
-    or None, and whether the one-pose solve reads the child's twist (or a descendant's).
+    ``(const, needed, step)``: the attachment's constant part placed on all ``nx`` columns
+    (6, nx) or None, whether the one-pose solve reads the child's twist (or a descendant's),
+    and the joint's step (:func:`~pinflex.erls.terms.joint_step`) when it is constant (a
+    joint that does not move), else None.
     """
     return model.workspace(data).cached("one_pose_joints",
                                         lambda: _build_one_pose_joints(model, plan))
@@ -40,7 +42,10 @@ def _build_one_pose_joints(model, plan: SolvePlan) -> tuple:
             const = np.zeros((6, plan.nx))
             const[:, att.start : att.stop] = att.const
             const.setflags(write=False)
-        out.append((const, j.child in needed))
+        step = None if j.motion.moves else joint_step(j)
+        if step is not None:
+            step.setflags(write=False)
+        out.append((const, j.child in needed, step))
     return tuple(out)
 
 
@@ -54,8 +59,8 @@ def root_twists_one(model, plan: SolvePlan, terms, data=None) -> dict:
     nx = plan.nx
     rot, slide = terms.rot, terms.slide
     twist: dict = {model.plan.root: None}
-    for j, att, (const, needed) in zip(model.plan.joints, plan.joint_attach,
-                                       _one_pose_joints(model, plan, data)):
+    for j, att, (const, needed, step) in zip(model.plan.joints, plan.joint_attach,
+                                             _one_pose_joints(model, plan, data)):
         if not needed:
             continue
         e = twist[j.parent]
@@ -68,7 +73,8 @@ def root_twists_one(model, plan: SolvePlan, terms, data=None) -> dict:
             tau = att.lin @ e[0]
             if const is not None:
                 tau[:, att.start : att.stop] += att.const
-        step = joint_step(j, rot.get(j.name), slide.get(j.name))  # (1, 6, 6) or (6, 6)
+        if step is None:  # the joint moves: its step at this pose, (1, 6, 6)
+            step = joint_step(j, rot.get(j.name), slide.get(j.name))
         twist[j.child] = (step @ tau).reshape(1, 6, nx)
     return twist
 
