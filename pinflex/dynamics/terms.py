@@ -51,7 +51,7 @@ from pinflex.dynamics.carriers import Carriers, build_carriers
 from pinflex.erls.plan import attachment
 from pinflex.erls.terms import joint_step, joint_step_rate
 from pinflex.exceptions import ConfigurationError
-from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
+from pinflex.linalg import rotate_twist, skew, translate_twist
 from pinflex.validation import require_array
 
 #: Largest gravity component accepted [m/s^2] (1000 g: beyond any robot's test rig; larger
@@ -327,7 +327,7 @@ class ErlsDynamics:
         Ap = np.zeros((nv, nx))
         Adp = np.zeros((nv, nv, nx))
         for j in model.plan.joints:
-            if j.user_col < 0 or j.kind not in ("revolute", "prismatic"):
+            if j.user_col < 0 or not j.motion.moves:
                 continue
             att = j.attach
             ep, edp = e[j.parent], ed[j.parent]
@@ -335,7 +335,7 @@ class ErlsDynamics:
                 att.lin @ ep if att.const is None else att.const + att.lin @ ep)
             if tau is None:
                 continue
-            rows = slice(3, 6) if j.kind == "revolute" else slice(0, 3)
+            rows = j.motion.rows  # rotation (revolute) or translation (prismatic)
             a = j.R_o @ j.axis  # joint axis in parent axes (invariant under the joint)
             Ap[j.user_col] = a @ tau[rows]
             if edp is not None and att.lin is not None:
@@ -437,9 +437,8 @@ def root_twists(model, qrel: np.ndarray, vrel: np.ndarray):
             tw[j.child] = rate[j.child] = None
             continue
         # the one unique-ERLS rule of the assembly (erls.terms.joint_step) and its rate
-        q_j = qrel[j.user_col] if j.user_col >= 0 else 0.0
-        rot = j.R_o @ axis_rotation(j.axis, np.array([q_j]))[0] if j.kind == "revolute" else None
-        step = joint_step(j, rot, (j.R_o @ j.axis) * q_j)
+        rot = j.motion.rotation(j, qrel)
+        step = joint_step(j, rot, j.motion.slide(j, qrel))
         dstep = joint_step_rate(j, rot, vrel[j.user_col] if j.user_col >= 0 else np.zeros(nk))
         tw[j.child] = step @ tau
         childd = np.zeros((nk,) + tau.shape) if dstep is None else dstep @ tau

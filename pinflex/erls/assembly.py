@@ -13,8 +13,14 @@ import numpy as np
 from pinflex.erls import design as design_channels
 from pinflex.erls import joints as joint_conditions
 from pinflex.erls.kinematics import root_twists
-from pinflex.erls.terms import Algebra, BatchAlgebra, PoseTerms, twist_at, zeros_like
-from pinflex.linalg import translate_twist
+from pinflex.erls.terms import (
+    Algebra,
+    BatchAlgebra,
+    PoseTerms,
+    carrier_rows,
+    twist_at,
+    zeros_like,
+)
 
 __all__ = ["add_design_masses", "assemble", "matrices_from_terms", "root_twists"]
 
@@ -71,12 +77,8 @@ def assemble(model, terms: PoseTerms, alg: Algebra):
     shape_b = terms.jac[carriers[0]].shape[:1] if carriers else (1,)
     Mdesign = np.zeros((model.ny,) + shape_b + (nd, nd))
     for pm in model.plan.point_masses:
-        name, link, xyz = pm.name, pm.link, pm.xyz
-        jl = terms.jac[link]
-        tau = twist_at(alg, pm.attach, twist[link])
-        g = np.concatenate(
-            [zeros_like(jl, nx) if tau is None else tau, translate_twist(xyz) @ jl], axis=-1
-        )[..., :3, :]
+        name, link = pm.name, pm.link
+        g = carrier_rows(twist_at(alg, pm.attach, twist[link]), terms.jac[link], pm.xyz, 3, nx)
         m = alg.mm(np.swapaxes(g, -1, -2), g)
         if name in design_index:
             Mdesign[design_index[name]] += m
@@ -84,11 +86,8 @@ def assemble(model, terms: PoseTerms, alg: Algebra):
             value = model.point_mass_values[name]
             M = value * m if M is None else M + value * m
     for body in model.plan.bodies:  # rigid bodies on beams: all six twist rows
-        jl = terms.jac[body.link]
         tau = twist_at(alg, body.attach, twist[body.link])
-        g = np.concatenate(
-            [zeros_like(jl, nx) if tau is None else tau, translate_twist(body.xyz) @ jl],
-            axis=-1)
+        g = carrier_rows(tau, terms.jac[body.link], body.xyz, 6, nx)
         m = alg.mm(np.swapaxes(g, -1, -2), body.inertia @ g)
         M = m if M is None else M + m
     if M is None:

@@ -315,7 +315,7 @@ def _soft_springs_free(plan, conds, spring_refs) -> tuple:
     """
     if not plan.beams or not any(c.kind == "spring" for c in conds):
         return conds
-    kinds = {j.name: j.kind for j in plan.joints}
+    turns = {j.name: j.motion.rotates for j in plan.joints}
     rot = lin = np.inf
     for p in plan.beams.values():
         spec = p.spec
@@ -324,14 +324,14 @@ def _soft_springs_free(plan, conds, spring_refs) -> tuple:
         lin = min(lin, 3.0 * EI / spec.length_m**3)
     out = []
     for c in conds:
-        ref = rot if kinds.get(c.name) != "prismatic" else lin
+        ref = rot if turns.get(c.name, True) else lin
         soft = c.kind == "spring" and c.stiffness < SOFT_SPRING_RATIO * ref
         if soft and c.name not in spring_refs:
             import warnings
 
             from pinflex.exceptions import SoftSpringWarning
 
-            unit = "N/m" if kinds.get(c.name) == "prismatic" else "N m/rad"
+            unit = "N m/rad" if turns.get(c.name, True) else "N/m"
             warnings.warn(
                 f"joint '{c.name}': stiffness {c.stiffness:.3g} {unit} is below "
                 f"{SOFT_SPRING_RATIO:g} times the softest beam's own stiffness ({ref:.3g} {unit}):"
@@ -362,7 +362,7 @@ def _check_spring_scale(model_plan, spring_joints) -> None:
         ax = spec.E * sec.A / le  # axial [N/m]
         scale = max(scale, rot, ax * 1e-6)
     for j, k in spring_joints:
-        ref = scale if j.kind == "revolute" else scale * 1e6
+        ref = scale if j.motion.rotates else scale * 1e6
         if k > STIFF_SPRING_RATIO * ref:
             import warnings
 
@@ -385,7 +385,7 @@ def parent_rows(model, terms, alg, twist, joints_) -> np.ndarray:
             rows.append(None)
             continue
         a = j.R_o @ j.axis  # the joint axis in parent link axes (fixed by the joint rotation)
-        part = tau[..., 3:, :] if j.kind == "revolute" else tau[..., :3, :]
+        part = tau[..., j.motion.rows, :]  # rotation (revolute) or translation (prismatic)
         rows.append(np.einsum("i,...ix->...x", a, part))
     ref = next((r for r in rows if r is not None), None)
     if ref is None:

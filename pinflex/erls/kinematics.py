@@ -66,8 +66,9 @@ def pose_terms(arm, Q: np.ndarray, data: FlexibleData | None = None) -> PoseTerm
         for i, name in enumerate(names):
             rot[name] = R[:, i]
     for j in arm.plan.joints:
-        if j.kind == "prismatic":
-            slide[j.name] = (j.R_o @ j.axis)[None, :] * qrel[:, j.user_col, None]
+        s = j.motion.slide(j, qrel)
+        if s is not None:
+            slide[j.name] = s
     return PoseTerms(jac, rot, slide)
 
 
@@ -105,8 +106,9 @@ def pose_terms_one(arm, q: np.ndarray, data: FlexibleData | None = None) -> Pose
     for name, jid in arm._revolute_ids:
         rot[name] = liMi[jid].rotation[None]
     for j in arm.plan.joints:
-        if j.kind == "prismatic":
-            slide[j.name] = ((j.R_o @ j.axis) * qrel[j.user_col])[None]
+        s = j.motion.slide(j, qrel)
+        if s is not None:
+            slide[j.name] = s[None]
     return PoseTerms(jac, rot, slide)
 
 

@@ -92,7 +92,7 @@ def _rodrigues_constants(model) -> tuple:
     The revolute joints' names, user columns and ``R_o``, ``R_o K``, ``R_o K^2`` (K the axis'
     cross-product matrix) stacked (nj, 3, 3), and whether the coordinate map is the identity.
     """
-    rev = [j for j in model.plan.joints if j.kind == "revolute"]
+    rev = [j for j in model.plan.joints if j.motion.rotates]
     K = [skew(j.axis) for j in rev]
     A0 = np.array([j.R_o for j in rev]).reshape(-1, 3, 3)
     A1 = np.array([j.R_o @ k for j, k in zip(rev, K)]).reshape(-1, 3, 3)

@@ -11,17 +11,17 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex.erls.solve import SolvePlan, solve_plan
-from pinflex.erls.terms import offset_block
+from pinflex.erls.terms import joint_step
 from pinflex.linalg import translate_twist
 
 
 def _one_pose_joints(model, plan: SolvePlan, data=None) -> tuple:
     """Per joint, the constants :func:`root_twists_one` uses (cached per workspace, read-only).
 
-    ``(const, P, needed)``: the attachment's constant part placed on all ``nx`` columns
-    (6, nx) or None, the joint's projection as its two diagonal 3 × 3 blocks (2, 3, 3), times
-    ``R_oᵀ`` for joints whose rotation is constant, and whether the one-pose solve reads the
-    child's twist (or a descendant's).
+    ``(const, needed, step)``: the attachment's constant part placed on all ``nx`` columns
+    (6, nx) or None, whether the one-pose solve reads the child's twist (or a descendant's),
+    and the joint's step (:func:`~pinflex.erls.terms.joint_step`) when it is constant (a
+    joint that does not move), else None.
     """
     return model.workspace(data).cached("one_pose_joints",
                                         lambda: _build_one_pose_joints(model, plan))
@@ -42,24 +42,25 @@ def _build_one_pose_joints(model, plan: SolvePlan) -> tuple:
             const = np.zeros((6, plan.nx))
             const[:, att.start : att.stop] = att.const
             const.setflags(write=False)
-        P = np.stack([j.proj[:3, :3], j.proj[3:, 3:]])
-        if j.kind != "revolute":
-            P = P @ j.R_o.T
-        P.setflags(write=False)
-        out.append((const, P, j.child in needed))
+        step = None if j.motion.moves else joint_step(j)
+        if step is not None:
+            step.setflags(write=False)
+        out.append((const, j.child in needed, step))
     return tuple(out)
 
 
 def root_twists_one(model, plan: SolvePlan, terms, data=None) -> dict:
-    """:func:`root_twists` of one pose (b = 1), without the algebra indirection.
+    """:func:`~pinflex.erls.solve.root_twists` of one pose (b = 1), without the algebra.
 
-    Only for the links the one-pose solve reads (beams, rigid inertias, point masses) and
-    their ancestors: other links (a tool frame behind the last mass) get no entry.
+    The same rule (:func:`~pinflex.erls.terms.joint_step`), only for the links the one-pose
+    solve reads (beams, rigid inertias, point masses) and their ancestors: other links (a
+    tool frame behind the last mass) get no entry.
     """
     nx = plan.nx
+    rot, slide = terms.rot, terms.slide
     twist: dict = {model.plan.root: None}
-    for j, att, (const, P, needed) in zip(model.plan.joints, plan.joint_attach,
-                                          _one_pose_joints(model, plan, data)):
+    for j, att, (const, needed, step) in zip(model.plan.joints, plan.joint_attach,
+                                             _one_pose_joints(model, plan, data)):
         if not needed:
             continue
         e = twist[j.parent]
@@ -72,12 +73,9 @@ def root_twists_one(model, plan: SolvePlan, terms, data=None) -> dict:
             tau = att.lin @ e[0]
             if const is not None:
                 tau[:, att.start : att.stop] += att.const
-        if j.kind == "prismatic":
-            tau = tau + offset_block(terms.slide[j.name])[0] @ tau
-        elif j.kind == "revolute":
-            P = P @ terms.rot[j.name][0].T  # projection after the joint's rotation
-        # the two 3-row halves (translation, rotation) each turned and projected
-        twist[j.child] = (P @ tau.reshape(2, 3, nx)).reshape(1, 6, nx)
+        if step is None:  # the joint moves: its step at this pose, (1, 6, 6)
+            step = joint_step(j, rot.get(j.name), slide.get(j.name))
+        twist[j.child] = (step @ tau).reshape(1, 6, nx)
     return twist
 
 

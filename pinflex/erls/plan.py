@@ -18,6 +18,7 @@ from pinflex.erls.terms import (
     JointPlan,
     ModelPlan,
     PointMassPlan,
+    joint_kind,
 )
 from pinflex.exceptions import ConfigurationError, PlanarModelError
 from pinflex.linalg import rotate_twist, translate_twist
@@ -39,7 +40,7 @@ def coordinate_map(model, absolute: bool) -> np.ndarray:
                 f"'{pmodel.names[j]}' does not follow joint '{pmodel.names[j - 1]}'"
             )
         jdesc = model.description.joints[pmodel.names[j]]
-        if jdesc.type not in ("revolute", "continuous"):
+        if not joint_kind(jdesc.type).rotates:
             raise ConfigurationError("absolute coordinates need revolute joints only")
         axes.append(data.oMi[j].rotation @ jdesc.axis)
     for a in axes[1:]:
@@ -105,24 +106,19 @@ def build_plan(model) -> ModelPlan:
     joints = []
     for link in order[1:]:
         jd = desc.joints[desc.parent_joint[link]]
-        kind = {"continuous": "revolute"}.get(jd.type, jd.type)
-        proj = np.eye(6)
-        if kind == "revolute":
-            proj[3:, 3:] -= np.outer(jd.axis, jd.axis)
-        elif kind == "prismatic":
-            proj[:3, :3] -= np.outer(jd.axis, jd.axis)
+        kind = joint_kind(jd.type)
         joints.append(
             JointPlan(
                 name=jd.name,
                 parent=jd.parent,
                 child=link,
-                kind=kind,
+                kind=kind.name,
                 user_col=vidx.get(jd.name, -1),
                 R_o=_frozen(jd.rotation),
                 xyz=_frozen(jd.xyz),
                 axis=_frozen(jd.axis),
                 attach=attachment(beams, jd.parent, jd.xyz),
-                proj=_frozen(proj),
+                proj=_frozen(kind.projection(jd.axis)),
             )
         )
     # mass carriers; bodies on rigid links join their link's inertia (at the link origin)
@@ -235,7 +231,7 @@ def check_planar(model) -> np.ndarray | None:
     normal = None
     for name in model.joint_names:
         jd = desc.joints[name]
-        if jd.type == "prismatic":
+        if not joint_kind(jd.type).rotates:
             continue
         jid = pmodel.getJointId(name)
         a = data.oMi[jid].rotation @ jd.axis
@@ -257,7 +253,7 @@ def check_planar(model) -> np.ndarray | None:
             )
     for name in model.joint_names:
         jd = desc.joints[name]
-        if jd.type == "prismatic" and normal is not None:
+        if not joint_kind(jd.type).rotates and normal is not None:
             a = data.oMi[pmodel.getJointId(name)].rotation @ jd.axis
             if abs(a @ normal) > 1e-9:
                 raise PlanarModelError(f"prismatic joint '{name}' leaves the plane")

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pinflex import beam
-from pinflex.erls.terms import BatchAlgebra, joint_step, propagate_root_twists
+from pinflex.erls.terms import BatchAlgebra, carrier_rows, joint_step, propagate_root_twists
 from pinflex.exceptions import EigenSolverError
 from pinflex.linalg import rotate_twist, translate_twist
 
@@ -66,6 +66,11 @@ class _LinkCore:
     H_ev: np.ndarray
     H_vv: np.ndarray
     x_rows: np.ndarray  # rows of C/R giving the link's nodal coordinates x (nodes 1..N)
+
+    @property
+    def blocks(self) -> tuple:
+        """``(H_oo, H_oe, H_ov, H_ee, H_ev, H_vv)``, the blocks :func:`link_mass` takes."""
+        return self.H_oo, self.H_oe, self.H_ov, self.H_ee, self.H_ev, self.H_vv
 
 
 @dataclass(frozen=True)
@@ -279,6 +284,59 @@ def explicit_twist(tw, sources, alg, stop: int | None = None):
     return alg.mm(T, tau)
 
 
+def link_mass(core, H, J, ep, alg, nx: int, nv: int, nd: int, out=None,
+              factor=None) -> np.ndarray:
+    """One beam's part of the solver-coordinate mass, from its constant blocks ``H``.
+
+    The one assembly of a beam's kinetic energy in solver coordinates: :func:`mass` (the
+    nominal blocks of :func:`solve_plan`), the design channels of the conditioned solve
+    (:mod:`pinflex.erls.solve_conditions`) and their Taylor jets
+    (:mod:`pinflex.parametric.solver_design`) all add it, on any algebra.
+
+    Args:
+        core: The link's constant blocks (its columns ``start:stop``).
+        H: ``(H_oo, H_oe, H_ov, H_ee, H_ev, H_vv)``: the blocks of ``Aᵀ M_link A`` over the
+            link's own coordinates, its root twist and its frame twist.
+        J: Frame Jacobian of the link (lead, 6, nv).
+        ep: Elastic root twist on the upstream columns (lead, 6, w), or None.
+        alg: The algebra of the leading axis.
+        nx: Elastic coordinates; nv: joint coordinates; nd = nx + nv.
+        out: Add to this (lead, nd, nd) array instead of a new one.
+        factor: Scale (lead,) of the blocks (a design channel's value), or None for 1.
+
+    Returns:
+        ``out`` (or a new array) with the link's part added.
+    """
+    H_oo, H_oe, H_ov, H_ee, H_ev, H_vv = H
+    mm, c0 = alg.mm, alg.const_at
+    if out is None:
+        out = np.zeros((alg.size, nd, nd))
+    f = None if factor is None else np.asarray(factor)[:, None, None]
+
+    def scaled(X):
+        return X if f is None else f * X
+
+    a, z = core.start, core.stop
+    out[c0, a:z, a:z] += scaled(H_oo)
+    if nv:
+        X = scaled(H_ov @ J)
+        out[:, a:z, nx:] += X
+        out[:, nx:, a:z] += np.swapaxes(X, -1, -2)
+        out[:, nx:, nx:] += scaled(mm(np.swapaxes(J, -1, -2), H_vv @ J))
+    if ep is not None:
+        w = ep.shape[-1]
+        X = scaled(H_oe @ ep)
+        out[:, a:z, :w] += X
+        out[:, :w, a:z] += np.swapaxes(X, -1, -2)
+        epT = np.swapaxes(ep, -1, -2)
+        out[:, :w, :w] += scaled(mm(epT, H_ee @ ep))
+        if nv:
+            X = scaled(mm(epT, H_ev @ J))
+            out[:, :w, nx:] += X
+            out[:, nx:, :w] += np.swapaxes(X, -1, -2)
+    return out
+
+
 def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=None):
     """Mass matrix (b, ndof, ndof) in solver coordinates ``[w; q]`` (stiffness: ``I`` on w).
 
@@ -294,33 +352,16 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
     """
     plan = solve_plan(model, data)
     alg = lead_algebra(alg, b)
-    mm, c0, lead = alg.mm, alg.const_at, alg.size
+    mm, lead = alg.mm, alg.size
     nx, nv = plan.nx, plan.nv
     nd = nx + nv
     twists, sources = factored_twists(model, plan, terms, alg)
     M = np.zeros((lead, nd, nd))
     Md = np.zeros((model.ny, lead, nd, nd)) if split else None
     for link, c in plan.cores.items():
-        a, z = c.start, c.stop
-        J = terms.jac[link]
-        M[c0, a:z, a:z] += c.H_oo
-        if nv:
-            X = c.H_ov @ J
-            M[:, a:z, nx:] += X
-            M[:, nx:, a:z] += np.swapaxes(X, -1, -2)
-            M[:, nx:, nx:] += mm(np.swapaxes(J, -1, -2), c.H_vv @ J)
-        if twists[link] is not None:
-            ep = explicit_twist(twists[link], sources, alg, a)  # upstream columns only
-            a = ep.shape[-1]
-            X = c.H_oe @ ep
-            M[:, c.start : z, :a] += X
-            M[:, :a, c.start : z] += np.swapaxes(X, -1, -2)
-            epT = np.swapaxes(ep, -1, -2)
-            M[:, :a, :a] += mm(epT, c.H_ee @ ep)
-            if nv:
-                X = mm(epT, c.H_ev @ J)
-                M[:, :a, nx:] += X
-                M[:, nx:, :a] += np.swapaxes(X, -1, -2)
+        ep = (None if twists[link] is None else  # upstream columns only
+              explicit_twist(twists[link], sources, alg, c.start))
+        link_mass(c, c.blocks, terms.jac[link], ep, alg, nx, nv, nd, out=M)
     # rigid carriers: composite 6 × 6 (and 6 × nv) blocks per source, one wide product each
     comp: dict = {}
 
@@ -344,20 +385,15 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
             D = D + mm(np.swapaxes(GT, -1, -2), W @ GJ)
         comp[key] = (C, D)
 
-    def on_beam(link, att, gJ, rows):
-        """Motion rows ``g`` (lead, rows, nd) of a point on a beam: the section's elastic
-        twist there (its own coordinates and the root twist, explicit) and ``gJ`` on q."""
+    def on_beam(link, att, xyz, rows):
+        """Motion rows ``g`` (lead, rows, nd) of a point on a beam (:func:`carrier_rows`):
+        the section's elastic twist there (own coordinates and root twist, explicit)."""
         e = None if twists[link] is None else explicit_twist(twists[link], sources, alg)
         e_full = None
         if e is not None:
             e_full = np.zeros((lead, 6, nx))
             e_full[:, :, : e.shape[-1]] = e
-        tau = attach_twist(att, e_full, alg, nx)
-        g = np.zeros((lead, rows, nd))
-        if tau is not None:
-            g[:, :, :nx] = tau[:, :rows]
-        g[:, :, nx:] = gJ
-        return g
+        return carrier_rows(attach_twist(att, e_full, alg, nx), terms.jac[link], xyz, rows, nx)
 
     for link, inertia in model.plan.inertias.items():
         add_rigid(-1, link, None, terms.jac[link], inertia)
@@ -379,15 +415,15 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
             if value == 0.0:
                 continue
         target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
-        gJ = (translate_twist(xyz) @ terms.jac[link])[:, :3]
         W = value * eye3 if np.ndim(value) == 0 else value
         if link in plan.cores:  # on a beam: its own coordinates and the root twist, explicit
-            g = on_beam(link, att, gJ, 3)
+            g = on_beam(link, att, xyz, 3)
             target += mm(np.swapaxes(g, -1, -2), W @ g)
         else:
+            gJ = (translate_twist(xyz) @ terms.jac[link])[:, :3]
             add_rigid(slot, link, translate_twist(xyz)[:3], gJ, W)
     for body, att in zip(model.plan.bodies, plan.body_attach):  # on beams: six twist rows
-        g = on_beam(body.link, att, translate_twist(body.xyz) @ terms.jac[body.link], 6)
+        g = on_beam(body.link, att, body.xyz, 6)
         M += mm(np.swapaxes(g, -1, -2), body.inertia @ g)
     for (k, slot), (C, D) in comp.items():
         target = M if slot < 0 or Md is None else Md[slot]  # slot >= 0 only when split
@@ -400,5 +436,3 @@ def mass(model, terms, y: np.ndarray, b: int, *, alg=None, split=False, data=Non
             target[:, nx:, :w] += np.swapaxes(X, -1, -2)
     return (M, Md) if split else M
 
-
-#: Largest row count of the one-pose layout (:func:`mass_one`); larger models use :func:`mass`.

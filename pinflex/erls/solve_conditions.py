@@ -110,38 +110,6 @@ def _build_link_blocks(model, data) -> dict:
     return out
 
 
-def link_mass(core, H, J, ep, alg, nx: int, nv: int, nd: int, out=None,
-              factor=None) -> np.ndarray:
-    """One link's part of the solver-coordinate mass with blocks ``H`` (as :func:`solve.mass`).
-
-    Returned as a new (lead, nd, nd) array, or added to ``out`` times ``factor`` (lead,).
-    """
-    H_oo, H_oe, H_ov, H_ee, H_ev, H_vv = H
-    mm, c0 = alg.mm, alg.const_at
-    if out is None:
-        out = np.zeros((alg.size, nd, nd))
-    f = 1.0 if factor is None else np.asarray(factor)[:, None, None]
-    a, z = core.start, core.stop
-    out[c0, a:z, a:z] += f * H_oo
-    if nv:
-        X = f * (H_ov @ J)
-        out[:, a:z, nx:] += X
-        out[:, nx:, a:z] += np.swapaxes(X, -1, -2)
-        out[:, nx:, nx:] += f * mm(np.swapaxes(J, -1, -2), H_vv @ J)
-    if ep is not None:
-        w = ep.shape[-1]
-        X = f * (H_oe @ ep)
-        out[:, a:z, :w] += X
-        out[:, :w, a:z] += np.swapaxes(X, -1, -2)
-        epT = np.swapaxes(ep, -1, -2)
-        out[:, :w, :w] += f * mm(epT, H_ee @ ep)
-        if nv:
-            X = f * mm(epT, H_ev @ J)
-            out[:, :w, nx:] += X
-            out[:, nx:, :w] += np.swapaxes(X, -1, -2)
-    return out
-
-
 def parent_rows(model, plan, alg, twists, sources, joints) -> np.ndarray:
     """``aᵀθ_parent`` of each joint over ``w``: (lead, len(joints), nx) in the algebra ``alg``.
 
@@ -162,7 +130,7 @@ def parent_rows(model, plan, alg, twists, sources, joints) -> np.ndarray:
         if tau is None:
             continue
         a = joint.R_o @ joint.axis  # the joint axis in parent link axes
-        part = tau[:, 3:] if joint.kind == "revolute" else tau[:, :3]
+        part = tau[:, joint.motion.rows]  # rotation (revolute) or translation (prismatic)
         out[:, row] = np.einsum("i,lix->lx", a, part)
     return out
 
@@ -235,8 +203,8 @@ def _design_terms(model, plan, terms, y, b, alg, twists, sources, M, data):
             tw = twists[ch.owner]
             ep_cache[ch.owner] = (None if tw is None else
                                   solve.explicit_twist(tw, sources, alg, core.start))
-        link_mass(core, blocks[n], terms.jac[ch.owner], ep_cache[ch.owner], alg, nx, nv, nx + nv,
-                  out=M, factor=delta)
+        solve.link_mass(core, blocks[n], terms.jac[ch.owner], ep_cache[ch.owner], alg, nx, nv,
+                        nx + nv, out=M, factor=delta)
     return M, khat, k_design
 
 

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from pinflex.description import FlexibleLink
-from pinflex.linalg import rotate_twist, skew
+from pinflex.linalg import axis_rotation, rotate_twist, skew, translate_twist
 
 if TYPE_CHECKING:
     from pinflex.erls.design import DesignLayout
@@ -129,6 +130,11 @@ class JointPlan:
     axis: np.ndarray
     attach: Attachment
     proj: np.ndarray
+
+    @property
+    def motion(self) -> JointKind:
+        """What the joint's kind does (:data:`JOINT_KINDS`): the one dispatch on ``kind``."""
+        return JOINT_KINDS[self.kind]
 
 
 @dataclass(frozen=True)
@@ -321,6 +327,121 @@ def offset_block(p: np.ndarray) -> np.ndarray:
     return out
 
 
+class JointKind:
+    """What one kind of joint does in the ERLS assembly (the one dispatch on joint kind).
+
+    Every branch on a joint's kind lives here: the model's layers consult
+    ``JointPlan.motion`` (a member of :data:`JOINT_KINDS`) for the joint's motion subspace,
+    its pose terms and its unique-ERLS step. This base class is the fixed joint.
+
+    Attributes:
+        name: ``'revolute'``, ``'prismatic'`` or ``'fixed'``.
+        moves: Whether the joint has a coordinate.
+        rotates: Whether that coordinate is an angle [rad] (else a length [m]).
+        rows: Rows of a twist ``[v; ω]`` along which the joint moves: ``3:6`` (rotation) for
+            a revolute joint, ``0:3`` (translation) for a prismatic one, None when fixed. The
+            joint's projection removes its axis there, and the joint's physical relative
+            motion reads ``axisᵀ twist[rows]`` of its parent attachment.
+    """
+
+    name = "fixed"
+    moves = False
+    rotates = False
+    rows: slice | None = None
+
+    def __repr__(self) -> str:
+        return f"<joint kind {self.name}>"
+
+    def projection(self, axis: np.ndarray) -> np.ndarray:
+        """``proj`` (6, 6): the identity without the joint's motion subspace (child axes)."""
+        proj = np.eye(6)
+        if self.rows is not None:
+            proj[self.rows, self.rows] -= np.outer(axis, axis)
+        return proj
+
+    def rotation(self, j: JointPlan, qrel: np.ndarray) -> np.ndarray | None:
+        """Child-in-parent rotation (3, 3) at one pose (revolute joints), or None.
+
+        Args:
+            j: The joint's plan.
+            qrel: The arm's Pinocchio-order coordinates (nv,) [rad or m].
+        """
+        return None
+
+    def slide(self, j: JointPlan, qrel: np.ndarray) -> np.ndarray | None:
+        """Offset (..., 3) [m] of the child origin from its mount (prismatic joints), or None.
+
+        Args:
+            j: The joint's plan.
+            qrel: The arm's Pinocchio-order coordinates (..., nv) [rad or m].
+        """
+        return None
+
+    def step(self, j: JointPlan, rot=None, slide=None, alg=None) -> np.ndarray:
+        """The joint's unique-ERLS step (:func:`joint_step`): ``proj Ad(R_oᵀ)``, constant."""
+        return j.proj @ rotate_twist(j.R_o.T)
+
+    def step_rate(self, j: JointPlan, rot=None, rate=None) -> np.ndarray | None:
+        """The step's rate per joint rate (:func:`joint_step_rate`): None (constant)."""
+        return None
+
+
+class RevoluteKind(JointKind):
+    """A revolute (or continuous) joint: its coordinate turns the child about ``axis``."""
+
+    name = "revolute"
+    moves = True
+    rotates = True
+    rows = slice(3, 6)
+
+    def rotation(self, j, qrel):
+        """``R_o Rot(axis, q)`` (3, 3), ``q`` the joint's angle [rad] in ``qrel``."""
+        return j.R_o @ axis_rotation(j.axis, np.array([qrel[j.user_col]]))[0]
+
+    def step(self, j, rot=None, slide=None, alg=None):
+        """``proj Ad(Rᵀ)``, ``R`` the child-in-parent rotation (``rot``, (lead, 3, 3))."""
+        return j.proj @ rotate_twist(np.swapaxes(rot, -1, -2))
+
+    def step_rate(self, j, rot=None, rate=None):
+        """``d step/dt`` per rate (k, 6, 6): ``d(Rᵀ)/dq = -[a]× Rᵀ``."""
+        rate = np.asarray(rate, dtype=float)
+        return j.proj @ rotate_twist(-rate[:, None, None] * (skew(j.axis) @ rot.T))
+
+
+class PrismaticKind(JointKind):
+    """A prismatic joint: its coordinate slides the child along ``R_o axis``."""
+
+    name = "prismatic"
+    moves = True
+    rows = slice(0, 3)
+
+    def slide(self, j, qrel):
+        """``q · R_o axis`` (..., 3) [m], ``q`` the joint's value [m] in ``qrel``."""
+        return (j.R_o @ j.axis) * qrel[..., j.user_col, None]
+
+    def step(self, j, rot=None, slide=None, alg=None):
+        """``proj Ad(R_oᵀ) (I + O(s))``, ``s`` the offset (``slide``, (lead, 3))."""
+        base = j.proj @ rotate_twist(j.R_o.T)
+        lifted = base if alg is None else alg.const(base)
+        return lifted + base @ offset_block(slide)
+
+    def step_rate(self, j, rot=None, rate=None):
+        """``d step/dt`` per rate (k, 6, 6): ``proj Ad(R_oᵀ) O(rate · R_o axis)``."""
+        rate = np.asarray(rate, dtype=float)
+        s = j.R_o @ j.axis
+        return (j.proj @ rotate_twist(j.R_o.T)) @ offset_block(rate[:, None] * s)
+
+
+#: The kinds of joint of the ERLS model, by URDF type (``continuous`` is revolute).
+JOINT_KINDS: Mapping[str, JointKind] = MappingProxyType({
+    "revolute": RevoluteKind(), "prismatic": PrismaticKind(), "fixed": JointKind()})
+
+
+def joint_kind(urdf_type: str) -> JointKind:
+    """The :class:`JointKind` of a URDF joint type (``continuous`` joints are revolute)."""
+    return JOINT_KINDS["revolute" if urdf_type == "continuous" else urdf_type]
+
+
 def joint_step(j: JointPlan, rot=None, slide=None, alg=None) -> np.ndarray:
     """The unique-ERLS rule of one joint: ``child root twist = step @ attachment twist``.
 
@@ -333,8 +454,9 @@ def joint_step(j: JointPlan, rot=None, slide=None, alg=None) -> np.ndarray:
       mount point (``slide``, pose-dependent), ``O`` its :func:`offset_block`;
     * fixed: ``proj Ad(R_oᵀ)`` (constant).
 
-    Every route that propagates root twists (the nodal assembly, the solver-coordinate and
-    one-pose assemblies, the dynamics) applies this one rule.
+    Every route that propagates root twists (the nodal assembly, the solver-coordinate,
+    factored and one-pose assemblies, the dynamics) applies this one rule
+    (:meth:`JointKind.step` of the joint's kind).
 
     Args:
         j: The joint's plan.
@@ -345,13 +467,7 @@ def joint_step(j: JointPlan, rot=None, slide=None, alg=None) -> np.ndarray:
     Returns:
         ``step`` (lead, 6, 6), or (6, 6) for a fixed joint.
     """
-    if j.kind == "revolute":
-        return j.proj @ rotate_twist(np.swapaxes(rot, -1, -2))
-    base = j.proj @ rotate_twist(j.R_o.T)
-    if j.kind == "prismatic":
-        lifted = base if alg is None else alg.const(base)
-        return lifted + base @ offset_block(slide)
-    return base
+    return j.motion.step(j, rot, slide, alg)
 
 
 def propagate_root_twists(plan: ModelPlan, terms: PoseTerms, alg, attach) -> dict:
@@ -390,13 +506,32 @@ def joint_step_rate(j: JointPlan, rot=None, rate=None) -> np.ndarray | None:
     Returns:
         ``d step / dt`` per rate (k, 6, 6), or None for a fixed joint.
     """
-    rate = np.asarray(rate, dtype=float)
-    if j.kind == "revolute":  # d(Rᵀ)/dq = -[a]× Rᵀ
-        return j.proj @ rotate_twist(-rate[:, None, None] * (skew(j.axis) @ rot.T))
-    if j.kind == "prismatic":
-        s = j.R_o @ j.axis
-        return (j.proj @ rotate_twist(j.R_o.T)) @ offset_block(rate[:, None] * s)
-    return None
+    return j.motion.step_rate(j, rot, rate)
+
+
+def carrier_rows(tau, jac: np.ndarray, xyz: np.ndarray, rows: int, nx: int) -> np.ndarray:
+    """Motion of a point or body carried by a link, over the coordinates ``[x; q]``.
+
+    The one map of a carrier's velocity for both mass routes (nodal and solver coordinates):
+    the first ``rows`` rows (3: a point mass's velocity, 6: a rigid body's twist) of its
+    elastic twist ``tau`` on the elastic coordinates, and of ``X(xyz) J`` on the joint
+    coordinates, ``J`` the link's frame Jacobian and ``X`` the transport to the point.
+
+    Args:
+        tau: Elastic twist at the point (lead, 6, nx) (link axes), or None where it is zero.
+        jac: Frame Jacobian of the link (lead, 6, nv).
+        xyz: The point in the link frame (3,) [m].
+        rows: 3 or 6.
+        nx: Number of elastic coordinates.
+
+    Returns:
+        ``g`` (lead, rows, nx + nv).
+    """
+    g = np.zeros(jac.shape[:-2] + (rows, nx + jac.shape[-1]))
+    if tau is not None:
+        g[..., :nx] = tau[..., :rows, :]
+    g[..., nx:] = (translate_twist(xyz) @ jac)[..., :rows, :]
+    return g
 
 
 def zeros_like(jac: np.ndarray, nx: int) -> np.ndarray:

@@ -37,7 +37,7 @@ def static_joints(model: FlexibleModel) -> frozenset[int]:
     flexible = set(solve.solve_plan(model).cores)
     still = {model.plan.root} - flexible
     for j in model.plan.joints:  # parents come before children
-        if j.kind == "fixed" and j.parent in still and j.child not in flexible:
+        if not j.motion.moves and j.parent in still and j.child not in flexible:
             still.add(j.child)
     out = set()
     C = model.coord_map

@@ -60,12 +60,12 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
     J = {model.plan.root: np.zeros((nc, 6, nv))}
     rot, slide = {}, {}
     for j in model.plan.joints:
-        if j.kind == "revolute":
+        if j.motion.rotates:
             terms = _angle_terms(model, joint_vars, j.user_col)
             R = j.R_o @ _rotation_jet(space, j.axis, q0p[j.user_col], terms, mm)
             t = jets.constant(space, j.xyz)
             rot[j.name] = R
-        elif j.kind == "prismatic":
+        elif j.motion.moves:  # prismatic
             d = jets.constant(space, q0p[j.user_col])
             for var, c in _angle_terms(model, joint_vars, j.user_col):
                 d = d + c * jets.variable(space, var, 0.0)
@@ -83,10 +83,8 @@ def pose_jets(model: FlexibleModel, space: JetSpace, q0: np.ndarray,
         RT = np.swapaxes(R, -1, -2)
         lin = JP[:, :3] - mm(skew(t), JP[:, 3:])
         Jc = np.concatenate([mm(RT, lin), mm(RT, JP[:, 3:])], axis=1)
-        if j.kind == "revolute":
-            Jc[0, 3:, j.user_col] += j.axis
-        elif j.kind == "prismatic":
-            Jc[0, :3, j.user_col] += j.axis
+        if j.motion.moves:  # the joint's own rate along its rows (rotation or translation)
+            Jc[0, j.motion.rows, j.user_col] += j.axis
         J[j.child] = Jc
     jac = {link: J[link] @ model.coord_map for link in model.plan.carriers}
     return PoseTerms(jac, rot, slide)

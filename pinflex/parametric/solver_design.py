@@ -37,7 +37,6 @@ import numpy as np
 from pinflex.erls import design as erls_design
 from pinflex.erls import eigensolve, solve
 from pinflex.erls.solve_conditions import link_blocks, parent_rows
-from pinflex.erls.solve_conditions import link_mass as _link_mass
 from pinflex.exceptions import ConfigurationError
 from pinflex.jets import JetSpace
 from pinflex.parametric.algebra import SparseJetAlgebra
@@ -158,8 +157,8 @@ def add_terms(model, space: JetSpace, terms, alg, nj: int, design_idx, y0, M: np
                 tw = twists[ch.owner]
                 ep_cache[ch.owner] = (None if tw is None else
                                       solve.explicit_twist(tw, sources, salg, core.start))
-            unit = _link_mass(core, blocks[n], terms.jac[ch.owner], ep_cache[ch.owner], salg,
-                              nx, nv, nd)
+            unit = solve.link_mass(core, blocks[n], terms.jac[ch.owner], ep_cache[ch.owner],
+                                   salg, nx, nv, nd)
             M[pt] += unit[pa] * fc[pb][:, None, None]
     if locks:
         return _eliminate_locks(model, space, terms, salg, twists, sources, emb, M,
