@@ -8,7 +8,10 @@ the environment sets it), round by round interleaved, the order alternating betw
 * benchmark A's study (``pinflex simulate examples/benchmark_a.toml``: the assignment, then
   the baseline and the assigned design simulated);
 * a spatial arm along a plain motion (``pinflex simulate urdf/ur3_tubes.xml --trajectory
-  examples/real_arms/ur3_motion.csv --frame tool0 --after 0.05``: no assignment).
+  MOVE.csv --frame tool0 --after 0.05``: no assignment), MOVE.csv a quintic rest-to-rest
+  move of 0.5 s from the first pose of ``examples/real_arms/ur3_motion.csv``, written by the
+  benchmark (0.1 rad on each of the first three joints; a short run, where fixed costs weigh
+  most).
 
 Sides: without ``--out`` (the physics and the printed summary), with ``--out DIR`` (plus the
 run's data: series JSON, npz, validity CSV, run.json) and, unless ``--no-pictures``, with
@@ -35,12 +38,28 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-CASES = {
-    "benchmark A study": ["simulate", str(ROOT / "examples" / "benchmark_a.toml")],
-    "UR3 plain motion": ["simulate", str(ROOT / "urdf" / "ur3_tubes.xml"), "--trajectory",
-                         str(ROOT / "examples" / "real_arms" / "ur3_motion.csv"),
-                         "--frame", "tool0", "--after", "0.05"],
-}
+def _ur3_move(path: Path) -> Path:
+    """The UR3 case's motion: 0.5 s quintic rest-to-rest, 21 samples (module doc)."""
+    import numpy as np
+
+    lines = (ROOT / "examples" / "real_arms" / "ur3_motion.csv").read_text().splitlines()
+    q0 = np.array([float(v) for v in lines[1].split(",")[1:]])
+    t = np.linspace(0.0, 0.5, 21)
+    s = t / 0.5
+    h = 10 * s**3 - 15 * s**4 + 6 * s**5
+    rows = [lines[0]] + [",".join(f"{float(v)!r}" for v in (ti, *(q0 + hi * np.array(
+        [0.1, 0.1, 0.1, 0.0, 0.0, 0.0])))) for ti, hi in zip(t, h)]
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def _cases(tmp: Path) -> dict:
+    return {
+        "benchmark A study": ["simulate", str(ROOT / "examples" / "benchmark_a.toml")],
+        "UR3 plain motion": ["simulate", str(ROOT / "urdf" / "ur3_tubes.xml"), "--trajectory",
+                             str(_ur3_move(tmp / "MOVE.csv")), "--frame", "tool0",
+                             "--after", "0.05"],
+    }
 
 
 def _run(argv: list[str]) -> tuple[float, float]:
@@ -82,7 +101,7 @@ def main(argv=None) -> int:
         sides["out+charts+preview"] = ["--out", str(tmp / "pictures"), "--charts", "--preview"]
     load0 = os.getloadavg()
     result: dict = {"blas_threads": blas_threads(), "rounds": args.rounds, "cases": {}}
-    for case, base in CASES.items():
+    for case, base in _cases(tmp).items():
         for extra in sides.values():  # warm-up: imports, caches, folders
             _run(base + extra)
         cpu: dict = {s: [] for s in sides}
@@ -93,7 +112,7 @@ def main(argv=None) -> int:
                 cpu[s].append(c)
                 wall[s].append(w)
         entry: dict = {"command": "pinflex " + " ".join(
-            a.replace(str(ROOT) + os.sep, "") for a in base)}
+            a.replace(str(ROOT) + os.sep, "").replace(str(tmp) + os.sep, "") for a in base)}
         for s in sides:
             entry[s] = {"cpu_median_s": float(np.median(cpu[s])),
                         "wall_median_s": float(np.median(wall[s]))}
