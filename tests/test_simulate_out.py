@@ -132,14 +132,24 @@ def _scene(page: str) -> tuple[str, bytes, str]:
     return page[:m.start()], data, page[m.end():]
 
 
-def test_report_from_the_saved_run_equals_the_direct_output(tmp_path, capsys):
+@pytest.mark.parametrize("locked", [False, True])
+def test_report_from_the_saved_run_equals_the_direct_output(tmp_path, capsys, locked):
     """`pinflex report DIR` = `simulate --out DIR --charts --preview`, file by file.
 
     Charts byte for byte; the playback page up to meshcat's object ids (time-based, new on
-    every drawing). The second design of a study (an assignment) goes through the same path.
+    every drawing). Also with the elbow locked (the page draws the solver coordinates of the
+    locked-joint model rebuilt from the file).
     """
     pytest.importorskip("meshcat")
     robot, csv = _robot(tmp_path), _csv(tmp_path / "move.csv")
+    if locked:
+        robot.write_text(robot.read_text().replace(
+            '<pinflex:flexible link="link1"',
+            '<pinflex:joint name="q2" locked="true"/>\n  <pinflex:flexible link="link1"', 1))
+        assert "locked" in robot.read_text()
+        rows = csv.read_text().splitlines()  # absolute angles: the elbow turns with link 1
+        csv.write_text("\n".join([rows[0]] + [",".join(r.split(",")[:2] + [repr(
+            float(r.split(",")[1]) + Q[1] - Q[0])]) for r in rows[1:]]))
     direct = tmp_path / "direct"
     rc, printed = _run(capsys, _argv(robot, csv, "--out", str(direct), "--charts", "--preview",
                                      "--exaggeration", "150"))
