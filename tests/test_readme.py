@@ -223,6 +223,6 @@ def test_tour_commands_run_and_print_what_the_prose_says(tmp_path, monkeypatch, 
     assert f"{before} → {after}" in prose
     peaks = re.findall(r"residual ([0-9.]+) mm", outputs[4])
     assert f"{float(peaks[0]):.3f} → {float(peaks[1]):.3f} mm" in prose
-    for name in ("traj.csv", "modes_along.png", "assign/assignment.csv", "sim/tip_deflection.png",
+    for name in ("traj.csv", "modes_along.png", "assign/assignment.csv", "sim/assigned_series.json",
                  "modes.html"):
         assert (out_dir / name).is_file(), name

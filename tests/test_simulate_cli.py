@@ -125,7 +125,8 @@ def test_locked_joint_with_out_writes_the_playback(tmp_path, capsys):
     urdf = _locked_elbow(tmp_path)
     csv = _csv(tmp_path / "move.csv", lambda h: (Q[0] + 0.2 * h, Q[1] + 0.2 * h))
     rc = main(["simulate", str(urdf), "--planar", "--trajectory", str(csv), "--after", "0.01",
-               "--sample-hz", "1000", "--out", str(tmp_path / "out"), "--json"])
+               "--sample-hz", "1000", "--out", str(tmp_path / "out"), "--charts", "--preview",
+               "--json"])
     assert rc == 0
     files = json.loads(capsys.readouterr().out)["files"]
     assert any(f.endswith("design_playback.html") for f in files)

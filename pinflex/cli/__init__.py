@@ -34,6 +34,7 @@ SUBCOMMANDS: list[str] = [
     "batch",
     "prbdm",
     "simulate",
+    "report",
 ]
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 from pinflex.cli.common import add_model_arguments, parse_values
 from pinflex.exceptions import ConfigurationError
@@ -28,9 +28,18 @@ def add_parser(sub) -> None:
                    help="with a robot file: keep in-plane elastic dofs only")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--out", default=None, metavar="DIR",
-                   help="folder for the charts and the time series (JSON)")
+                   help="folder for the run's data, always written (per design NAME: "
+                   "NAME_series.json with the metrics and the frame's deflection, NAME_run.npz "
+                   "with the simulation's arrays, NAME_validity.csv; run.json naming the model); "
+                   "charts and playback pages only with --charts / --preview, or later with "
+                   "'pinflex report DIR'")
+    p.add_argument("--charts", action="store_true",
+                   help="with --out: also write the charts (tip_deflection.png, validity.png)")
+    p.add_argument("--preview", action="store_true",
+                   help="with --out: also write the meshcat playback page of each design "
+                   "(NAME_playback.html)")
     p.add_argument("--exaggeration", type=float, default=200.0,
-                   help="with --out: factor on the elastic motion in the meshcat playback pages "
+                   help="with --preview: factor on the elastic motion in the playback pages "
                    "(0: no playback; default 200)")
     p.add_argument("--tol", type=float, default=None, metavar="TOL",
                    help="prescribed drive: halve the time step until the Richardson estimate of "
@@ -85,6 +94,16 @@ def simulation_overrides(args: argparse.Namespace) -> dict:
     return out
 
 
+class StudyRun(NamedTuple):
+    """What :func:`run_study` returns."""
+
+    reports: list
+    sims: list
+    settings: Any
+    result: Any
+    source: dict
+
+
 def _is_study(path: str) -> bool:
     return str(path).lower().endswith(".toml")
 
@@ -92,7 +111,7 @@ def _is_study(path: str) -> bool:
 def run_study(path, joints: str | None = None, values: dict[str, float] | None = None,
               tol: float | None = None, *, trajectory: str | None = None,
               planar: bool = False, simulation: dict | None = None, progress: bool = False,
-              ) -> tuple[list, list, Any, Any]:
+              ) -> StudyRun:
     """Simulate a study's designs (after its assignment), or a robot file along a trajectory.
 
     Everything the drive refuses (a locked joint the trajectory turns, a locked joint under
@@ -111,8 +130,9 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
             simulation).
 
     Returns:
-        ``(reports, [(simulation, dynamics)], settings, assignment result or None)``: the
-        baseline and assigned designs of a study with targets, else one design ``"design"``.
+        :class:`StudyRun` ``(reports, [(simulation, dynamics)], settings, assignment result or
+        None, model source)``: the baseline and assigned designs of a study with targets, else
+        one design ``"design"``; the source is :func:`pinflex.dynamics.saved.model_source`.
     """
     from pathlib import Path
 
@@ -162,51 +182,74 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
         sims.append((sim, dyn))
         bar.update()
     bar.close()
-    return reports, sims, settings, result
+    from pinflex.dynamics.saved import model_source
+
+    source = model_source(cfg.robot, planar=cfg.planar, joints=cfg.joints, values=cfg.values)
+    return StudyRun(reports, sims, settings, result, source)
+
+
+def write_charts(reports, sims, out) -> list[str]:
+    """The charts of a run into folder ``out``: ``tip_deflection.png`` and, when the runs have
+    a validity indicator, ``validity.png``; returns the files written."""
+    from pathlib import Path
+
+    from pinflex.dynamics.charts import deflection_chart, validity_chart
+
+    out = Path(out)
+    files = [str(deflection_chart(reports, out / "tip_deflection.png"))]
+    named = [(rep.name, sim.validity) for rep, sim in zip(reports, sims)
+             if sim.validity is not None]
+    if named:
+        files.append(str(validity_chart(named, out / "validity.png")))
+    return files
+
+
+def write_previews(reports, sims, dyns, out, exaggeration: float) -> list[str]:
+    """The meshcat playback page of each design, ``NAME_playback.html`` in folder ``out``."""
+    from pathlib import Path
+
+    from pinflex.visualization.playback import simulation_playback_html
+
+    return [str(simulation_playback_html(dyn, sim, Path(out) / f"{rep.name}_playback.html",
+                                         exaggeration=exaggeration))
+            for rep, sim, dyn in zip(reports, sims, dyns)]
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Run ``pinflex simulate``."""
     if not 0.0 <= args.exaggeration <= 1e6:
-        from pinflex.exceptions import ConfigurationError
-
         raise ConfigurationError(f"--exaggeration {args.exaggeration:g}: give a factor from 0 "
                                  "(no playback) to 1e6")
+    if (args.charts or args.preview) and not args.out:
+        raise ConfigurationError("--charts and --preview write into the --out folder: give "
+                                 "--out DIR")
+    preview = args.preview and args.exaggeration > 0
+    if args.out:
+        from pinflex.outputs import check_dir_target
+
+        check_dir_target(args.out)
+    if preview:
+        from pinflex.visualization.offline import require_meshcat
+
+        require_meshcat("the playback pages of --preview")
     t0 = time.perf_counter()
-    reports, sims, settings, result = run_study(
+    reports, sims, settings, result, source = run_study(
         args.config, args.joints, parse_values(args.set) if args.set else None, args.tol,
         trajectory=args.trajectory, planar=args.planar, simulation=simulation_overrides(args),
         progress=not args.no_progress and sys.stderr.isatty())
     total = time.perf_counter() - t0
     files: list[str] = []
     if args.out:
-        from pinflex.dynamics.charts import deflection_chart
-        from pinflex.outputs import output_dir, write_text
+        from pinflex.dynamics.saved import save_run
 
-        out = output_dir(args.out)
-        files.append(str(deflection_chart(reports, out / "tip_deflection.png")))
-        named = [(rep.name, sim.validity) for rep, (sim, _) in zip(reports, sims)
-                 if sim.validity is not None]
-        if named:
-            from pinflex.dynamics.charts import validity_chart
-
-            files.append(str(validity_chart(named, out / "validity.png")))
-        for rep, (sim, _) in zip(reports, sims):
-            p = out / f"{rep.name}_series.json"
-            write_text(p, rep.to_json(series=True), "simulation JSON")
-            files.append(str(p))
-            if sim.validity is not None:
-                files.append(str(sim.validity.write_csv(out / f"{rep.name}_validity.csv")))
-        if args.exaggeration > 0:
-            playback: Any = None
-            try:
-                from pinflex.visualization.playback import simulation_playback_html as playback
-            except ImportError:  # the preview extra (meshcat) is not installed
-                pass
-            if playback is not None:
-                for rep, (sim, dyn) in zip(reports, sims):
-                    files.append(str(playback(dyn, sim, out / f"{rep.name}_playback.html",
-                                              exaggeration=args.exaggeration)))
+        runs = [sim for sim, _ in sims]
+        files += [str(f) for f in save_run(args.out, reports, runs, source=source,
+                                           drive=settings.drive, gravity=settings.gravity)]
+        if args.charts:
+            files += write_charts(reports, runs, args.out)
+        if preview:
+            files += write_previews(reports, runs, [dyn for _, dyn in sims], args.out,
+                                    args.exaggeration)
     designs = []
     for rep in reports:
         d = rep.summary()

@@ -6,6 +6,7 @@
 * :mod:`~pinflex.dynamics.motion`: joint motion through trajectory samples;
 * :mod:`~pinflex.dynamics.prescribed`: prescribed joint motion (kineto-elastodynamics);
 * :mod:`~pinflex.dynamics.torque`: torque drive (forward dynamics under motor torques);
+* :mod:`~pinflex.dynamics.saved`: a run saved as data (``pinflex simulate --out``), read back;
 * :mod:`~pinflex.dynamics.integrators`: generalized-α and ``scipy`` integrators, exact holds;
 * :mod:`~pinflex.dynamics.damping`: one damping definition for simulation, FRF and export;
 * :mod:`~pinflex.dynamics.frf`: receptances at a pose;

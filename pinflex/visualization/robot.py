@@ -1,4 +1,4 @@
-"""A flexible robot drawn in meshcat: URDF visuals, deformed beams, joints and point masses.
+"""A flexible robot drawn in meshcat: URDF visuals, deformed beams, joints, masses and bodies.
 
 * URDF visual geometry is loaded by Pinocchio (``pin.buildGeomFromUrdfString``, meshes found
   through ``package://`` URIs in the description's folder and in example-robot-data) and put
@@ -10,6 +10,11 @@
 * Links without visual geometry get simple shapes: a sphere at the link origin and a cylinder
   to each child joint. Moving joints get a sphere; point masses a sphere whose volume grows
   with the mass (zero masses are not drawn).
+* Rigid bodies (``<pinflex:body>`` and the URDF inertia a beam link keeps, e.g. its motor) are
+  cubes at their centre of mass, of the volume of a sphere of the same mass, turning with
+  their link frame. On a beam a body sits at the drawn centreline at the axial station of its
+  centre of mass plus its offset from the axis (turned with the link frame, without the
+  section's elastic rotation), as the model carries it.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from pinflex.exceptions import InvalidDescription, PinflexWarning
 from pinflex.visualization import shapes
 from pinflex.visualization.scene import (
     BEAM_COLOUR,
+    BODY_COLOUR,
     GHOST_RGBA,
     JOINT_COLOUR,
     LINK_COLOUR,
@@ -225,6 +231,16 @@ class RobotDrawing:
             writer.add(path, mg.Sphere(r), mg.MeshPhongMaterial(color=MASS_COLOUR),
                        translation(self.mass_position(rest, pm.link, pm.xyz)))
             self._masses.append((path, pm.link, pm.xyz))
+        self._bodies = []
+        body_mat = mg.MeshPhongMaterial(color=BODY_COLOUR)
+        for b in desc.bodies:
+            if b.mass <= 0.0:
+                continue
+            side = body_side_m(b.mass)
+            path = f"bodies/{b.name}"
+            writer.add(path, mg.Box([side, side, side]), body_mat,
+                       self.body_placement(rest, b.link, b.com))
+            self._bodies.append((path, b.link, np.asarray(b.com, dtype=float)))
 
     def _load_visuals(self, visual_model: pin.GeometryModel) -> set[str]:
         """Put the URDF visuals in the scene; returns the links that have some.
@@ -286,6 +302,24 @@ class RobotDrawing:
         st = state.beams[link]
         return np.array([np.interp(s, axial, st[:, c]) for c in range(3)])
 
+    def body_placement(self, state: RobotState, link: str, com: np.ndarray) -> np.ndarray:
+        """World placement (4×4) of a body drawn at ``com`` (link frame) of a link.
+
+        Rigid link: the link frame moves it. Beam: the drawn centreline at the axial station
+        of ``com`` plus the offset from the axis turned with the link frame.
+        """
+        R = state.links[link].rotation
+        T = np.eye(4)
+        T[:3, :3] = R
+        if link not in self.model.plan.beams:
+            T[:3, 3] = state.links[link].act(np.asarray(com, dtype=float))
+            return T
+        spec = self.model.plan.beams[link].spec
+        axis = spec.tip / spec.length_m
+        s = float(np.clip(com @ axis, 0.0, spec.length_m))
+        T[:3, 3] = self.mass_position(state, link, com) + R @ (com - s * axis)
+        return T
+
     # ------------------------------------------------------------------ keyframes
     def key(self, frame: int, state: RobotState, beam_rgb: np.ndarray | None = None) -> None:
         """Record a keyframe of every moving object."""
@@ -306,6 +340,13 @@ class RobotDrawing:
                 writer.key(frame, f"beams/{link}/{i}", T, sc, beam_rgb)
         for path, link, xyz in self._masses:
             writer.key(frame, path, translation(self.mass_position(state, link, xyz)))
+        for path, link, com in self._bodies:
+            writer.key(frame, path, self.body_placement(state, link, com))
+
+
+def body_side_m(mass: float) -> float:
+    """Edge [m] of the cube drawn for a body: the volume of a point-mass sphere of that mass."""
+    return float((mass / MASS_SPHERE_DENSITY) ** (1.0 / 3.0))
 
 
 def stations_local(model: FlexibleModel, link: str, stations_per_element: int) -> np.ndarray:
