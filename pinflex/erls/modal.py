@@ -475,7 +475,12 @@ def preloaded_pencil(model, Q: np.ndarray, y: np.ndarray, preload: Preload, data
 
 
 def _check_stable(model, Mred: np.ndarray, Kee: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    """Eigenvalues (..., ne) of the preloaded pencil; :class:`PreloadBuckles` if one is <= 0."""
+    """Eigenvalues (..., ne) of the preloaded pencil.
+
+    Raises:
+        PreloadBuckles: The lowest eigenvalue is negative beyond the rounding level.
+        EigenSolverError: It lies within the rounding level (``8 ε λ_max``).
+    """
     try:
         L = np.linalg.cholesky(Mred)
     except np.linalg.LinAlgError as exc:
@@ -483,16 +488,21 @@ def _check_stable(model, Mred: np.ndarray, Kee: np.ndarray, Q: np.ndarray) -> np
     Li = np.linalg.inv(L)
     A = Li @ Kee @ np.swapaxes(Li, -1, -2)
     lam = np.linalg.eigvalsh(0.5 * (A + np.swapaxes(A, -1, -2)))
-    low = lam[..., 0]
-    scale = np.abs(lam).max(axis=-1)
-    bad = np.flatnonzero(np.atleast_1d(low <= 1e-13 * scale))
-    if bad.size:
-        i = int(bad[0])
-        raise PreloadBuckles(
-            f"the preload makes the arm unstable at pose {i} (q = "
-            f"{np.array2string(np.atleast_2d(Q)[i], precision=4)}): lowest eigenvalue "
-            f"{float(np.atleast_1d(low)[i]):.4g} rad^2/s^2 <= 0, a load beyond buckling (or a "
-            "spring too soft for the load it holds); reduce the load or stiffen the arm")
+    low = np.atleast_1d(lam[..., 0])
+    noise = 8.0 * np.finfo(float).eps * np.atleast_1d(np.abs(lam).max(axis=-1))
+    for i in range(low.size):
+        q = np.array2string(np.atleast_2d(Q)[i], precision=4)
+        if low[i] < -noise[i]:
+            raise PreloadBuckles(
+                f"the preload makes the arm unstable at pose {i} (q = {q}): lowest eigenvalue "
+                f"{low[i]:.4g} rad^2/s^2 < 0, a load beyond buckling (or a spring too soft for "
+                "the load it holds); reduce the load or stiffen the arm")
+        if low[i] <= noise[i]:
+            raise EigenSolverError(
+                f"the preloaded pencil at pose {i} (q = {q}) cannot resolve its lowest "
+                f"eigenvalue ({low[i]:.4g} rad^2/s^2 within its rounding level {noise[i]:.2g}): "
+                "the arm is at its buckling load, or a joint spring is so stiff that the nodal "
+                "pencil loses every digit (lock that joint instead)")
     return lam
 
 

@@ -24,6 +24,12 @@ map ``T``):
   ``−∂F/∂q`` of the generalized static load ``F = [Σ Eᵢᵀ Rᵀ fᵢ; Σ Sᵢᵀ Rᵀ fᵢ]``, by
   fourth-order central differences (step :data:`STEP`, error about ``1e-12`` relative). On a
   joint spring ``k`` holding a pendulum this gives ``ω² = (k ± m g l) / I``.
+* **Joints turn about their displaced points.** ERLS turns a joint's subtree about the joint's
+  undeformed point, and the subtree's nodal coordinates (displacements in the turning link
+  axes) carry the joint point's elastic translation ``t`` with them; a real joint turns about
+  its displaced point. Per revolute joint the loads' potential gains ``δq (F_w × a) · t``
+  (``F_w`` the outboard loads weighted by the share of ``t`` their nodes carry): without it two
+  beams on a locked joint are 9 % off the one column they form (tested to 2e-9 with it).
 
 Left out, as in the beam's ``K_G``: torsion, shear and bending-moment prestress, and the
 loads' moments about a joint across its axis (exact where those moments vanish or lie along
@@ -471,7 +477,67 @@ def preload_hessian(model, groups, q: np.ndarray, data) -> tuple[np.ndarray, np.
         H[:nx, nx:] = -dF[:nx]
         H[nx:, :nx] = -dF[:nx].T
         H[nx:, nx:] = -dF[nx:]
+        _displaced_pivots(model, groups, q, data, H)
     return 0.5 * (H + H.T), F0
+
+
+def _root_share(plan, link: str, c: np.ndarray) -> np.ndarray:
+    """Share (n,) of points' translation that a link's root translation gives them.
+
+    1 on a rigid link; on a beam the root node's Hermite translation weight at the points'
+    axial station (``1 − 3ξ² + 2ξ³`` in the first element, 0 beyond).
+    """
+    bp = plan.beams.get(link)
+    if bp is None:
+        return np.ones(c.shape[0])
+    L, n = bp.spec.length_m, bp.spec.elements
+    xi = np.clip(c @ (bp.spec.tip / L), 0.0, L) / (L / n)
+    return np.where(xi < 1.0, 1.0 - 3.0 * xi**2 + 2.0 * xi**3, 0.0)
+
+
+def _displaced_pivots(model, groups, q: np.ndarray, data, H: np.ndarray) -> None:
+    """Add the loads' term of joints turning about their displaced points (module doc).
+
+    ERLS turns a joint's subtree about the joint's undeformed point, and the elastic
+    coordinates of the subtree's nodes (their displacement in the turning link axes) carry the
+    joint point's elastic translation ``t`` with them. A joint turns about its displaced point:
+    the part of ``t`` the nodes carry does not turn. Per revolute joint ``j`` this adds
+    ``δq_j (F_w × a) · t`` to the potential, ``F_w`` the loads outboard of ``j`` weighted by the
+    share of ``t`` their nodes carry (1 minus the root shares along the path, see
+    :func:`_root_share`), ``a`` the joint axis.
+    """
+    plan, nx = model.plan, model.nx
+    ws = model.workspace(data)
+    frames = _link_frames(model, q, plan.links, ws.pin)
+    terms = model.pose_terms(q[None], data=ws)
+    e1 = model.root_twists(terms, BatchAlgebra(1))
+    by_link: dict[str, list] = {}
+    for gr in groups:
+        by_link.setdefault(gr.link, []).append(gr)
+    children: dict[str, list] = {}
+    for j in plan.joints:
+        children.setdefault(j.parent, []).append(j)
+    for j in plan.joints:
+        if j.kind != "revolute" or j.user_col < 0:
+            continue
+        tau = twist_at(BatchAlgebra(1), j.attach, e1.get(j.parent))
+        if tau is None:
+            continue
+        RP = frames[j.parent][1]
+        t_w = RP @ tau[0, :3]  # (3, nx) world translation of the joint point
+        a_w = RP @ (j.R_o @ j.axis)
+        Fw = np.zeros(3)
+        stack = [(j.child, 1.0)]  # (link, root share of its root)
+        while stack:
+            link, share = stack.pop()
+            for gr in by_link.get(link, ()):
+                Fw += ((1.0 - share * _root_share(plan, link, gr.c))[:, None] * gr.f).sum(axis=0)
+            for jc in children.get(link, ()):
+                xyz = np.asarray(jc.xyz, dtype=float)[None]
+                stack.append((jc.child, share * float(_root_share(plan, link, xyz)[0])))
+        if np.any(Fw):
+            H[nx + j.user_col, :nx] += np.cross(Fw, a_w) @ t_w
+            H[:nx, nx + j.user_col] += np.cross(Fw, a_w) @ t_w
 
 
 def _load_scale(model, groups, q, data) -> float:
