@@ -11,6 +11,7 @@ generalized gravity and its derivatives.
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import math
 
@@ -80,6 +81,7 @@ def _free_end_det(om2: float, gamma: float, p: float, mu: float = 0.0,
     return cols[0][0] * cols[1][1] - cols[0][1] * cols[1][0]
 
 
+@functools.lru_cache(maxsize=None)
 def heavy_column_hz(gamma: float, p: float = 0.0, k: int = 3, mu: float = 0.0,
                     delta: float = 0.0) -> np.ndarray:
     """The lowest ``k`` bending frequencies [Hz] of the column (shooting, module doc).
@@ -88,7 +90,7 @@ def heavy_column_hz(gamma: float, p: float = 0.0, k: int = 3, mu: float = 0.0,
     ``p = P L²/EI`` (a tip force, tension positive), ``mu``, ``delta``: a tip mass on a rigid
     bar (:func:`_free_end_det`).
     """
-    beta = np.arange(0.3, 9.0, 0.2)  # Ω = β², roots spaced about π in β
+    beta = np.arange(0.3, 9.0, 0.3)  # Ω = β², roots spaced about π in β
     roots = []
     args = (gamma, p, mu, delta)
     vals = [_free_end_det(b**4, *args) for b in beta]
@@ -99,7 +101,9 @@ def heavy_column_hz(gamma: float, p: float = 0.0, k: int = 3, mu: float = 0.0,
             roots.append(math.sqrt(om2))
             if len(roots) == k:
                 break
-    return np.array(roots) * math.sqrt(EI / (RHOA * L**4)) / (2.0 * math.pi)
+    out = np.array(roots) * math.sqrt(EI / (RHOA * L**4)) / (2.0 * math.pi)
+    out.setflags(write=False)
+    return out
 
 
 def test_reference_solver_gives_the_clamped_free_roots():
