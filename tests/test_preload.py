@@ -444,3 +444,4 @@ def test_cli_gravity_records_the_preload(tmp_path, capsys):
     assert err.count("\n") == 1 and "lock" in err.lower()
     assert main(["modes", path, "--gravity", "1", "2"]) == 2
     assert "three values" in capsys.readouterr().err
+
