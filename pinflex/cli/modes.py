@@ -8,12 +8,12 @@ import numpy as np
 
 from pinflex.cli.common import (
     add_robot_arguments,
+    bounded_value,
     inertia_text,
     joints_text,
     parse_values,
     robot_description,
 )
-from pinflex.validation import parse_number
 
 
 def add_parser(sub) -> None:
@@ -48,13 +48,7 @@ def gravity_value(text: str) -> float:
     """A ``--gravity`` component: a number of the grammar, at most 1e4 in size [m/s^2]."""
     from pinflex.erls.preload import MAX_GRAVITY
 
-    try:
-        value = parse_number(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    if abs(value) > MAX_GRAVITY:
-        raise argparse.ArgumentTypeError(f"{text!r} is beyond {MAX_GRAVITY:g} m/s^2")
-    return value
+    return bounded_value(text, MAX_GRAVITY, "gravity is in m/s^2")
 
 
 def gravity_of(args: argparse.Namespace):

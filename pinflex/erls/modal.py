@@ -450,7 +450,7 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     ne = model.n_elastic
     k = ne if n_modes is None else min(int(n_modes), ne)
     if preload is not None:
-        _check_stable(model, Mred, Kxx, q[None])
+        _check_stable(model, M, K, q[None])
     lam, phie = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[0, k - 1] if k else None)
     shapes = _nodal_shapes(model, M, K, phie)
     # sign: largest elastic component positive
@@ -474,20 +474,16 @@ def preloaded_pencil(model, Q: np.ndarray, y: np.ndarray, preload: Preload, data
     return M, K + preload_stiffness(design_model(model, y), Q, preload, y)
 
 
-def _check_stable(model, Mred: np.ndarray, Kee: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    """Eigenvalues (..., ne) of the preloaded pencil.
+def _check_stable(model, M: np.ndarray, K: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Eigenvalues (..., ne) of the preloaded pencil ``(M, K + K_P)`` (``K`` holding ``K_P``).
 
     Raises:
         PreloadBuckles: The lowest eigenvalue is negative beyond the rounding level.
-        EigenSolverError: It lies within the rounding level (``8 ε λ_max``).
+        EigenSolverError: It lies within the rounding level (``8 ε λ_max``), or the reduced
+            mass is not positive.
     """
-    try:
-        L = np.linalg.cholesky(Mred)
-    except np.linalg.LinAlgError as exc:
-        raise EigenSolverError("the reduced elastic mass matrix is not positive") from exc
-    Li = np.linalg.inv(L)
-    A = Li @ Kee @ np.swapaxes(Li, -1, -2)
-    lam = np.linalg.eigvalsh(0.5 * (A + np.swapaxes(A, -1, -2)))
+    _, _, A = cholesky_standard_form(model, M, K)
+    lam = np.linalg.eigvalsh(A)
     low = np.atleast_1d(lam[..., 0])
     noise = 8.0 * np.finfo(float).eps * np.atleast_1d(np.abs(lam).max(axis=-1))
     for i in range(low.size):
@@ -515,8 +511,7 @@ def _frequencies_preloaded(model, Q, y, preload: Preload, *, n_modes, check_boun
     single = Q.ndim == 1
     Qb = Q[None] if single else Q
     M, K = preloaded_pencil(model, Qb, y, preload, data=data)
-    Mred, Kee = reduced(model, M, K)
-    lam = _check_stable(model, Mred, Kee, Qb)
+    lam = _check_stable(model, M, K, Qb)
     if n_modes is not None:
         lam = lam[..., :n_modes]
     f = np.sqrt(lam) / (2.0 * np.pi)
