@@ -88,6 +88,27 @@ class EigenSolverError(PinflexError):
     """The generalized eigenproblem could not be solved reliably."""
 
 
+class PreloadBuckles(EigenSolverError):
+    """A preload (gravity, payload) makes the stiffness indefinite: the arm buckles under it."""
+
+
+class PreloadNotInEquilibrium(ConfigurationError):
+    """A free joint carries a static load of a preload: the arm has no static state there."""
+
+    def __init__(self, joints):
+        self.joints = list(joints)
+        said = "; ".join(
+            f"'{n}': static load {t:.4g} {'N' if kind == 'prismatic' else 'N m'}, stiffness "
+            f"{k:.4g} {'N/m' if kind == 'prismatic' else 'N m/rad'}"
+            for n, t, k, kind in self.joints)
+        super().__init__(
+            f"the preload acts on free joints ({said}): a free joint under a static load is "
+            "not in equilibrium, so there is no static state to vibrate about. Lock them "
+            "(joints='locked' or {joint: 'locked'}, --joints locked) or give them springs "
+            "(<pinflex:joint stiffness=...>, {joint: k}); a free joint the loads leave neutral "
+            "(a vertical axis under gravity) may stay free")
+
+
 class RepeatedEigenvalue(PinflexError):
     """A Taylor expansion was asked at a repeated or nearly repeated eigenvalue."""
 

@@ -455,6 +455,69 @@ def planar_two_link_frequencies(
     return solve_frequencies(K, M, n_rigid=n_hinges(joints, 2))
 
 
+def planar_chain_geometric(
+    angles: Sequence[float],
+    lengths: Sequence[float],
+    n_elements: Sequence[int],
+    *,
+    rhoA,
+    gravity: Sequence[float],
+    end_masses: Sequence[float] | None = None,
+    joints: Sequence | None = None,
+) -> np.ndarray:
+    """Geometric stiffness (world axes) of a planar chain under its weight, dofs as
+    :func:`planar_chain_matrices`.
+
+    The chain is statically determinate: the axial force at a section is the axial
+    component of the weight outboard of it (tension positive, ``N = F_out · e`` with ``e``
+    the link direction and ``F_out`` the outboard weight). Each element adds
+    ``∫ N(x) v'(x)² dx`` over its transverse Hermite dofs (v1, th1, v2, th2), ``N`` linear
+    along the element, three-point Gauss (exact); the loads stay dead (vertical), so their
+    potential is linear in the world-axes displacements and adds nothing else.
+
+    Args:
+        angles, lengths, n_elements, end_masses, joints: as :func:`planar_chain_matrices`.
+        rhoA: mass per length [kg/m], scalar or one per link.
+        gravity: world gravity (gx, gy) [m/s^2].
+
+    Returns:
+        ``K_G`` (n, n) [N/m, N, N m].
+    """
+    n_links = len(angles)
+    rhoA = _per_link(rhoA, n_links, "rhoA")
+    g = np.asarray(gravity, dtype=float)
+    ends = np.zeros(n_links) if end_masses is None else np.asarray(end_masses, dtype=float)
+    dofs = planar_chain_dofs(n_elements, joints)
+    ndof = int(max(t.max() for t in dofs)) + 1
+    KG = np.zeros((ndof, ndof))
+    outboard_mass = [float(sum(rhoA[k] * lengths[k] + ends[k] for k in range(i + 1, n_links)))
+                     for i in range(n_links)]
+    gx, gw = np.polynomial.legendre.leggauss(3)
+    for i in range(n_links):
+        L, n = lengths[i], n_elements[i]
+        le = L / n
+        e = np.array([math.cos(angles[i]), math.sin(angles[i])])
+        c, s = e
+        r = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        t = scipy.linalg.block_diag(r, r)
+        for el in range(n):
+            k_loc = np.zeros((6, 6))
+            for xg, wg in zip(gx, gw):
+                xi = 0.5 * (xg + 1.0)
+                x = (el + xi) * le  # station along the link
+                mass_out = rhoA[i] * (L - x) + ends[i] + outboard_mass[i]
+                N = mass_out * float(g @ e)
+                # slopes of the Hermite functions of (v1, th1, v2, th2) at xi
+                dN = np.array([(-6 * xi + 6 * xi**2) / le, 1 - 4 * xi + 3 * xi**2,
+                               (6 * xi - 6 * xi**2) / le, -2 * xi + 3 * xi**2])
+                k_loc[np.ix_([1, 2, 4, 5], [1, 2, 4, 5])] += 0.5 * wg * le * N * np.outer(dN, dN)
+            k_w = _sym(t.T @ k_loc @ t)
+            idx = np.concatenate([dofs[i][el], dofs[i][el + 1]])
+            keep = idx >= 0
+            KG[np.ix_(idx[keep], idx[keep])] += k_w[np.ix_(keep, keep)]
+    return KG
+
+
 # ---------------------------------------------------------------------------------------
 # Spatial frame
 # ---------------------------------------------------------------------------------------

@@ -28,20 +28,29 @@ def parse_values(items: Sequence[str] | None) -> dict[str, float]:
 JOINT_CHOICES = ("free", "locked", "annotated")
 
 
-def joint_value(text: str) -> float:
-    """A ``--q`` value: a number of the grammar, at most 1e6 in size [rad or m]."""
-    import argparse
+def bounded_value(text: str, limit: float, unit_hint: str) -> float:
+    """An argument value: a number of pinflex's grammar, at most ``limit`` in size.
 
-    from pinflex.trajectory.samples import MAX_JOINT_VALUE
+    Raises:
+        argparse.ArgumentTypeError: Not a number, or beyond ``limit`` (the message ends with
+            ``unit_hint``).
+    """
+    import argparse
 
     try:
         value = parse_number(text)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
-    if abs(value) > MAX_JOINT_VALUE:
-        raise argparse.ArgumentTypeError(f"{text!r} is beyond {MAX_JOINT_VALUE:g}: joint values "
-                                         "are in radians or metres")
+    if abs(value) > limit:
+        raise argparse.ArgumentTypeError(f"{text!r} is beyond {limit:g}: {unit_hint}")
     return value
+
+
+def joint_value(text: str) -> float:
+    """A ``--q`` value: a number of the grammar, at most 1e6 in size [rad or m]."""
+    from pinflex.trajectory.samples import MAX_JOINT_VALUE
+
+    return bounded_value(text, MAX_JOINT_VALUE, "joint values are in radians or metres")
 
 
 def add_model_arguments(p: argparse.ArgumentParser, *, default_joints: str | None = "annotated",

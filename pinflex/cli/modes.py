@@ -9,6 +9,7 @@ import numpy as np
 
 from pinflex.cli.common import (
     add_robot_arguments,
+    bounded_value,
     inertia_text,
     joints_text,
     parse_values,
@@ -51,7 +52,35 @@ def add_parser(sub) -> None:
     p.add_argument("--no-progress", action="store_true",
                    help="no progress bar on stderr (shown by default when stderr is a terminal;"
                    " with --trajectory)")
+    p.add_argument("--gravity", type=gravity_value, nargs="*", metavar="G", default=None,
+                   help="gravity preload: the stiffness of the arm's weight (axial forces in "
+                   "the beams, loads on the joints) in the modal analysis; GX GY GZ in world "
+                   "axes [m/s^2], or no value for 9.81 m/s^2 along -z of the base (default: no "
+                   "preload, as paper 000). Free joints must be locked or sprung unless the "
+                   "weight leaves them neutral")
     p.set_defaults(func=cmd_modes)
+
+
+def gravity_value(text: str) -> float:
+    """A ``--gravity`` component: a number of the grammar, at most 1e4 in size [m/s^2]."""
+    from pinflex.erls.preload import MAX_GRAVITY
+
+    return bounded_value(text, MAX_GRAVITY, "gravity is in m/s^2")
+
+
+def gravity_of(args: argparse.Namespace):
+    """The ``--gravity`` vector (3,) [m/s^2], or None without the flag."""
+    from pinflex.erls.preload import STANDARD_GRAVITY
+    from pinflex.exceptions import ConfigurationError
+
+    if args.gravity is None:
+        return None
+    if not args.gravity:
+        return (0.0, 0.0, -STANDARD_GRAVITY)
+    if len(args.gravity) != 3:
+        raise ConfigurationError(f"--gravity takes three values GX GY GZ [m/s^2] or none (9.81 "
+                                 f"m/s^2 along -z), got {len(args.gravity)}")
+    return tuple(args.gravity)
 
 
 def cmd_modes(args: argparse.Namespace) -> int:
@@ -66,7 +95,12 @@ def cmd_modes(args: argparse.Namespace) -> int:
     if args.modes is not None and args.modes > model.n_elastic:
         raise ConfigurationError(f"--modes {args.modes}: the model has elastic modes "
                                  f"1..{model.n_elastic}")
+    gravity = gravity_of(args)
     if args.trajectory is not None:
+        if gravity is not None:
+            raise ConfigurationError(
+                "--gravity goes with one pose (--q); along a trajectory use "
+                "FlexibleModel.frequencies(Q, gravity=...) for the sorted frequencies")
         if args.tol is not None:
             raise ConfigurationError("--tol picks the elements at one pose (--q); it does not "
                                      "go with --trajectory")
@@ -85,7 +119,10 @@ def cmd_modes(args: argparse.Namespace) -> int:
         model = FlexibleModel(refined(model.description, fidelity.factor), planar=args.planar,
                               values=parse_values(args.set), joints=args.joints)
     # frequencies only: the batched numpy path, which needs no SciPy (fast start-up)
-    freqs = model.frequencies(q, n_modes=args.modes)
+    from pinflex.erls.preload import make_preload
+
+    preload = make_preload(model, gravity)
+    freqs = model.frequencies(q, n_modes=args.modes, preload=preload)
     y = model.y0
     held = held_frequencies(model, q, n_modes=min(3, len(freqs)))
     if args.json:
@@ -106,6 +143,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
             "held_frequencies_hz": {k: v.tolist() for k, v in held.items()},
             "link_inertia": list(model.description.inertia_notes),
             "frequencies_hz": freqs.tolist(),
+            "preload": None if preload is None else preload.as_dict(),
         }
         if fidelity is not None:
             out["fidelity"] = {"tol": args.tol, "elements": fidelity.elements,
@@ -132,6 +170,8 @@ def cmd_modes(args: argparse.Namespace) -> int:
                            for d, v in zip(model.design, y))
         print(f"design: {values}")
     print(f"rigid modes: {model.n_rigid}")
+    if preload is not None:
+        print(f"preload: {preload} (geometric stiffness of the static loads)")
     if fidelity is not None:
         els = ", ".join(f"{k}={v}" for k, v in fidelity.elements.items())
         print(f"elements for tol {args.tol:g}: {els}; estimated error of the lowest "

@@ -10,7 +10,7 @@ more terms of first order in the elastic displacement ``u = E x``,
 and a beam carries the axial force ``N(s)`` of the inertial and gravity loads outboard of its
 section ``s``, whose second-order strain energy ``½ ∫ N (v'² + w'²) ds`` is the geometric
 stiffness ``K_G`` (tension stiffens, compression softens; :func:`pinflex.beam.
-element_geometric_stiffness`). The centrifugal term softens what ``K_G`` stiffens: on a spinning
+element_geometric_stiffness`, :func:`pinflex.erls.preload.geometric_stiffness`). The centrifugal term softens what ``K_G`` stiffens: on a spinning
 beam the chordwise modes keep ``ω² = ω²_flap − Ω²``; the two are added together or not at all.
 
 The virtual work of the inertial forces on the displaced point adds, in the joint rows, the
@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pinflex import beam
+from pinflex.erls.preload import geometric_stiffness
 from pinflex.linalg import skew
 
 TERMS = ("eq1", "full")
@@ -104,49 +104,15 @@ def speed_stiffness(dyn, q, qd, qdd) -> np.ndarray:
 
 
 def _add_geometric(dyn, Ks, J, Jd, R, e, qd, qdd, force) -> None:
-    """Add every beam's ``K_G`` of the axial force of the rigid motion's loads to ``Ks``."""
+    """Add every beam's ``K_G`` of the axial force of the rigid motion's loads to ``Ks``.
+
+    The axial force and ``K_G`` are :func:`pinflex.erls.preload.geometric_stiffness`'s (the
+    same rule as the static preload of the modal analysis); here a beam's load per unit mass
+    is ``a₀ − Rᵀg + A (s eₓ)`` of its link's rigid motion.
+    """
     plan = dyn.model.plan
-    gravity = dyn.gravity
-    children: dict[str, list] = {}
-    for j in plan.joints:
-        children.setdefault(j.parent, []).append(j)
-    line: dict[str, tuple] = {}  # beam link -> (ex, a0·ex, exᵀ A ex) of its line load
-    subtree: dict[str, np.ndarray] = {}  # resultant load of a link's subtree [N], world axes
-    for link in reversed(plan.links):  # children first
-        total = np.zeros(3)
-        for _, f in force.get(link, ()):
-            total += R[link] @ f.sum(axis=0)
-        bp = plan.beams.get(link)
-        if bp is not None:
-            spec = bp.spec
-            L = spec.length_m
-            ex = spec.tip / L
-            a0, w, al = link_motion(J[link], Jd[link], qd, qdd)
-            A = skew(al) + skew(w) @ skew(w)
-            a_rel = a0 - R[link].T @ gravity
-            line[link] = (ex, float(ex @ a_rel), float(ex @ A @ ex))
-            total += R[link] @ (spec.rhoA * (L * a_rel + 0.5 * L * L * (A @ ex)))
-        for j in children.get(link, ()):
-            total += subtree.get(j.child, 0.0)
-        subtree[link] = total
-    nx = dyn.nx
-    for link, bp in plan.beams.items():
-        spec = bp.spec
-        n, L = spec.elements, spec.length_m
-        le = L / n
-        ex, a_x, A_xx = line[link]
-        s = (np.arange(n)[:, None] + beam.GEOMETRIC_POINTS[None, :]) * le  # (n, 5) [m]
-        # tension = − axial component of the loads outboard of s; the line load exactly (its
-        # rigid acceleration is affine along the beam), point loads at their axial position
-        N = -spec.rhoA * ((L - s) * a_x + 0.5 * (L * L - s * s) * A_xx)
-        for c, f in force.get(link, ()):
-            sp = np.clip(c @ ex, 0.0, L)
-            N -= ((sp[None, None, :] > s[:, :, None]) * (f @ ex)[None, None, :]).sum(axis=-1)
-        for j in children.get(link, ()):
-            sp = float(np.clip(np.asarray(j.xyz) @ ex, 0.0, L))
-            N -= (sp > s) * float(ex @ (R[link].T @ subtree[j.child]))
-        KG = beam.assemble_line(beam.element_geometric_stiffness(le, N))
-        sel, root, _, _, _ = bp.kept
-        el = e.get(link)
-        bx = sel if el is None else sel + root @ el
-        Ks[:nx, :nx] += bx.T @ KG[np.ix_(bp.rows, bp.rows)] @ bx
+    line = {}
+    for link in plan.beams:
+        a0, w, al = link_motion(J[link], Jd[link], qd, qdd)
+        line[link] = (a0 - R[link].T @ dyn.gravity, skew(al) + skew(w) @ skew(w))
+    Ks[:dyn.nx, :dyn.nx] += geometric_stiffness(plan, R, line, force, e, dyn.nx)

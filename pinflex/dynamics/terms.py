@@ -48,15 +48,14 @@ import pinocchio as pin
 
 from pinflex.checks import check_y
 from pinflex.dynamics.carriers import Carriers, build_carriers
+from pinflex.erls.design import design_model
 from pinflex.erls.plan import attachment
+from pinflex.erls.preload import MAX_GRAVITY, check_gravity  # noqa: F401 (re-exported)
 from pinflex.erls.terms import joint_step, joint_step_rate
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import rotate_twist, skew, translate_twist
 from pinflex.validation import require_array
 
-#: Largest gravity component accepted [m/s^2] (1000 g: beyond any robot's test rig; larger
-#: values are unit slips and overflow the equations of motion).
-MAX_GRAVITY = 1e4
 
 
 @dataclass(frozen=True)
@@ -108,12 +107,7 @@ class ErlsDynamics:
         #: the model at design ``y`` (sections, materials, springs and masses from ``y``)
         self.model = model = design_model(model, y)
         self.y = y
-        g = np.zeros(3) if gravity is None else require_array(gravity, "gravity")
-        if g.shape != (3,) or not np.all(np.abs(g) <= MAX_GRAVITY):
-            raise ConfigurationError(
-                f"gravity must be 3 finite numbers of at most {MAX_GRAVITY:g} m/s² each "
-                f"({MAX_GRAVITY / 9.81:.0f} g), got {gravity!r}")
-        self.gravity = g
+        self.gravity = np.zeros(3) if gravity is None else check_gravity(gravity)
         # eq. (1) is written over every coordinate [x; q_all]; a locked joint is a constraint
         # of the drive on its physical angle (see ``locked``), not a change of the terms
         self.nx, self.nv = model.nx, model.nv
@@ -383,30 +377,6 @@ class ErlsDynamics:
             return Rw @ T, Rw @ (Xp @ JL)
 
         return at
-
-
-
-def design_model(model, y: np.ndarray):
-    """The model whose properties are those of design ``y`` (``model`` itself at its nominal).
-
-    Every property a design parameter sets (section dimensions, material constants, joint
-    spring stiffnesses, point masses referencing a parameter) is read from a model built at
-    ``y``, through the same description route as :meth:`FlexibleModel.matrices`, so the
-    dynamics and the modal analysis of one design agree. Design point masses are read from
-    ``y`` by the carriers.
-
-    Args:
-        model: The :class:`~pinflex.FlexibleModel`.
-        y: Design values (ny,), checked.
-
-    Returns:
-        ``model`` when no design parameter leaves its nominal value, else a model at ``y``.
-    """
-    params = {d.name: float(v) for d, v in zip(model.design, y)
-              if d.kind == "parameter" and float(v) != float(d.nominal)}
-    if not params:
-        return model
-    return model.with_values(params)
 
 
 

@@ -280,3 +280,26 @@ def design_mass(model, y, *, order: int = 0):
         return float(total[0])
     grad = total[1:1 + ny] if space is not None else np.zeros(ny)
     return float(total[0]), np.asarray(grad, dtype=float)
+
+
+def design_model(model, y: np.ndarray):
+    """The model whose properties are those of design ``y`` (``model`` itself at its nominal).
+
+    Every property a design parameter sets (section dimensions, material constants, joint
+    spring stiffnesses, point masses referencing a parameter) is read from a model built at
+    ``y``, through the same description route as :meth:`FlexibleModel.matrices`, so the
+    dynamics and the modal analysis of one design agree. Design point masses are read from
+    ``y`` by the carriers.
+
+    Args:
+        model: The :class:`~pinflex.FlexibleModel`.
+        y: Design values (ny,), checked.
+
+    Returns:
+        ``model`` when no design parameter leaves its nominal value, else a model at ``y``.
+    """
+    params = {d.name: float(v) for d, v in zip(model.design, y)
+              if d.kind == "parameter" and float(v) != float(d.nominal)}
+    if not params:
+        return model
+    return model.with_values(params)

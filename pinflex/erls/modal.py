@@ -8,8 +8,10 @@ import numpy as np
 
 from pinflex.checks import check_q, check_y
 from pinflex.erls import assembly, eigensolve, joints, kinematics, one_pose, solve, solve_conditions
+from pinflex.erls.design import design_model
+from pinflex.erls.preload import Preload, preload_stiffness
 from pinflex.erls.terms import BatchAlgebra
-from pinflex.exceptions import ConfigurationError, EigenSolverError
+from pinflex.exceptions import ConfigurationError, EigenSolverError, PreloadBuckles
 from pinflex.linalg import rotate_twist
 
 
@@ -30,6 +32,8 @@ class ModalResult:
             mode, (k, N+1, 6); ``node_elastic`` the elastic part only (rigid ERLS motion removed).
         design_names: Names of the design variables of ``y``.
         design_units: Their units (``kg``, ``m``, ``Pa``, ...).
+        preload: The static loads whose stiffness entered the analysis
+            (:class:`~pinflex.erls.preload.Preload`), or None.
     """
 
     q: np.ndarray
@@ -43,6 +47,7 @@ class ModalResult:
     node_elastic: dict[str, np.ndarray]
     design_names: tuple[str, ...] = ()
     design_units: tuple[str, ...] = ()
+    preload: Preload | None = None
 
     @property
     def omega_rad_s(self) -> np.ndarray:
@@ -71,6 +76,8 @@ class ModalResult:
                     zip(self.design_names, np.ravel(self.y), self.design_units)))
             else:
                 lines.append(f"  y = {vec(self.y)}")
+        if self.preload is not None:
+            lines.append(f"  preload: {self.preload}")
         lines.append(f"  {'mode':>4}  {'f [Hz]':>12}  {'omega [rad/s]':>14}")
         shown = self.eigvals.size if self.eigvals.size <= 12 else 10
         for k in range(shown):
@@ -130,17 +137,22 @@ def relative_joint_values(model, M: np.ndarray, K: np.ndarray):
     return P.T @ M @ P, P.T @ K @ P
 
 
-def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True, data=None):
+def frequencies(model, Q, y=None, *, n_modes: int | None = None, check_bounds=True, data=None,
+                preload: Preload | None = None):
     """Non-rigid eigenfrequencies [Hz] at one or many poses, ascending.
 
     Batched: all poses are assembled and solved together, by the conditioned solve of
     :mod:`pinflex.erls.solve` (free joints) or :mod:`pinflex.erls.solve_conditions` (joint
-    springs, locks, section and material design), the same as :func:`modes`.
+    springs, locks, section and material design), the same as :func:`modes`; with a
+    ``preload`` by the nodal pencil ``(M, K + K_P)`` (:func:`preloaded_pencil`).
 
     Returns:
         (k,) for one pose or (n, k).
     """
     data = model.workspace(data)
+    if preload is not None:
+        return _frequencies_preloaded(model, Q, y, preload, n_modes=n_modes,
+                                      check_bounds=check_bounds, data=data)
     plain = solve.supported(model)
     if not plain and not solve_conditions.covered(model):
         return _frequencies_nodal(model, Q, y, n_modes=n_modes, check_bounds=check_bounds,
@@ -252,14 +264,17 @@ def eigvals_from(model, M: np.ndarray, K: np.ndarray) -> np.ndarray:
 
 
 def modes(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
-          data=None) -> ModalResult:
+          data=None, preload: Preload | None = None) -> ModalResult:
     """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
 
     Solved like :func:`frequencies` (the conditioned solves of :mod:`pinflex.erls.solve` and
-    :mod:`pinflex.erls.solve_conditions`); the shapes are returned over the nodal coordinates
-    ``[x; q_kept]``.
+    :mod:`pinflex.erls.solve_conditions`, or the preloaded nodal pencil); the shapes are
+    returned over the nodal coordinates ``[x; q_kept]``.
     """
     data = model.workspace(data)
+    if preload is not None:
+        return _modes_nodal(model, q, y, n_modes=n_modes, check_bounds=check_bounds, data=data,
+                            preload=preload)
     plain = solve.supported(model)
     if not plain and not solve_conditions.covered(model):
         return _modes_nodal(model, q, y, n_modes=n_modes, check_bounds=check_bounds, data=data)
@@ -420,8 +435,8 @@ def _nodal_shapes(model, M: np.ndarray, K: np.ndarray, phie: np.ndarray) -> np.n
 
 
 def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=True,
-                 data=None) -> ModalResult:
-    """Modes from the nodal-coordinate pencil (models the conditioned solve lacks)."""
+                 data=None, preload: Preload | None = None) -> ModalResult:
+    """Modes from the nodal-coordinate pencil (models the conditioned solve lacks, preloads)."""
     import scipy.linalg
 
     q = check_q(model, q)
@@ -430,10 +445,14 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     y = check_y(model, y, bounds=check_bounds)
     terms = kinematics.pose_terms(model, q[None], data=data)
     M, K = assembly.matrices_from_terms(model, terms, y, 1)
+    if preload is not None:
+        K = K + preload_stiffness(design_model(model, y), q[None], preload, y)
     M, K = M[0], K[0]
     Mred, Kxx = reduced(model, M, K)
     ne = model.n_elastic
     k = ne if n_modes is None else min(int(n_modes), ne)
+    if preload is not None:
+        _check_stable(model, M, K, q[None])
     lam, phie = scipy.linalg.eigh(Kxx, Mred, subset_by_index=[0, k - 1] if k else None)
     shapes = _nodal_shapes(model, M, K, phie)
     # sign: largest elastic component positive
@@ -443,8 +462,62 @@ def _modes_nodal(model, q, y=None, *, n_modes: int | None = None, check_bounds=T
     return ModalResult(
         q=q, y=y, ndof=model.ndof, rigid_modes=model.n_rigid, eigvals=lam, shapes=shapes,
         node_positions=positions, node_motion=motion, node_elastic=elastic,
-        **design_labels(model),
+        **design_labels(model), preload=preload,
     )
+
+
+def preloaded_pencil(model, Q: np.ndarray, y: np.ndarray, preload: Preload, data=None):
+    """``(M, K + K_P)`` (n, ndof, ndof) at checked poses Q (n, nv) and one design y (ny,).
+
+    ``K_P`` is the stiffness of the preload's static loads (:mod:`pinflex.erls.preload`), on
+    the model at design ``y`` (:func:`pinflex.erls.design.design_model`).
+    """
+    M, K = model.matrices(Q, y, check_bounds=False, data=data)
+    return M, K + preload_stiffness(design_model(model, y), Q, preload, y)
+
+
+def _check_stable(model, M: np.ndarray, K: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Eigenvalues (..., ne) of the preloaded pencil ``(M, K + K_P)`` (``K`` holding ``K_P``).
+
+    Raises:
+        PreloadBuckles: The lowest eigenvalue is negative beyond the rounding level.
+        EigenSolverError: It lies within the rounding level (``8 ε λ_max``), or the reduced
+            mass is not positive.
+    """
+    _, _, A = cholesky_standard_form(model, M, K)
+    lam = np.linalg.eigvalsh(A)
+    low = np.atleast_1d(lam[..., 0])
+    noise = 8.0 * np.finfo(float).eps * np.atleast_1d(np.abs(lam).max(axis=-1))
+    for i in range(low.size):
+        q = np.array2string(np.atleast_2d(Q)[i], precision=4)
+        if low[i] < -noise[i]:
+            raise PreloadBuckles(
+                f"the preload makes the arm unstable at pose {i} (q = {q}): lowest eigenvalue "
+                f"{low[i]:.4g} rad^2/s^2 < 0, a load beyond buckling (or a spring too soft for "
+                "the load it holds); reduce the load or stiffen the arm")
+        if low[i] <= noise[i]:
+            raise EigenSolverError(
+                f"the preloaded pencil at pose {i} (q = {q}) cannot resolve its lowest "
+                f"eigenvalue ({low[i]:.4g} rad^2/s^2 within its rounding level {noise[i]:.2g}): "
+                "the arm is at its buckling load, or a joint spring is so stiff that the nodal "
+                "pencil loses every digit (lock that joint instead)")
+    return lam
+
+
+def _frequencies_preloaded(model, Q, y, preload: Preload, *, n_modes, check_bounds, data):
+    """:func:`frequencies` with a preload: the nodal pencil ``(M, K + K_P)``, batched."""
+    y = check_y(model, y, bounds=check_bounds)
+    if y.ndim != 1:
+        raise ConfigurationError("with a preload, give one design vector (ny,) for all poses")
+    _check_n_modes(n_modes)
+    single = Q.ndim == 1
+    Qb = Q[None] if single else Q
+    M, K = preloaded_pencil(model, Qb, y, preload, data=data)
+    lam = _check_stable(model, M, K, Qb)
+    if n_modes is not None:
+        lam = lam[..., :n_modes]
+    f = np.sqrt(lam) / (2.0 * np.pi)
+    return f[0] if single else f
 
 
 def node_fields(model, q: np.ndarray, shapes: np.ndarray, terms=None, data=None):

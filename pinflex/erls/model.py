@@ -49,6 +49,7 @@ from pinflex.erls import kinematics, modal
 from pinflex.erls.assembly import matrices_from_terms
 from pinflex.erls.kinematics import NodePlacement
 from pinflex.erls.plan import build_plan, coordinate_map
+from pinflex.erls.preload import Preload, make_preload
 from pinflex.erls.terms import (
     DesignVariable,
     ModelPlan,
@@ -718,7 +719,8 @@ class FlexibleModel:
 
     # ------------------------------------------------------------------ modal analysis
     def frequencies(self, Q, y=None, *, n_modes: int | None = None, check_bounds=True,
-                    data: FlexibleData | None = None):
+                    data: FlexibleData | None = None, gravity=None, loads=None,
+                    preload: Preload | None = None):
         """Non-rigid eigenfrequencies [Hz] at one pose (k,) or many (n, k), ascending.
 
         Batched: all poses are assembled and solved together. Frequencies are sorted at each
@@ -734,15 +736,26 @@ class FlexibleModel:
             n_modes: Keep the lowest ``n_modes`` (default: all ``nx``).
             check_bounds: Raise :class:`DesignVariableOutOfBounds` outside the bounds.
             data: Workspace (default: this thread's, see :meth:`workspace`).
+            gravity: Gravity preload (3,) in world axes [m/s²], e.g. ``(0, 0, -9.81)``: the
+                stiffness of the static loads enters ``K`` (:mod:`pinflex.erls.preload`);
+                default None, no preload (paper 000).
+            loads: Dead point forces of the preload (:class:`~pinflex.PointForce`: link,
+                point [m], world force [N]), e.g. a payload's weight.
+            preload: A :class:`~pinflex.Preload` instead of ``gravity`` and ``loads``.
 
         Returns:
             Frequencies [Hz], (k,) or (n, k).
+
+        Raises:
+            PreloadNotInEquilibrium: A preload loads a free joint (lock it or spring it).
+            PreloadBuckles: The preload makes the arm unstable.
         """
         n_modes = check_n_modes(self, n_modes)
         Q = check_q(self, Q)
         check_modal(self.ndof, 1 if Q.ndim == 1 else Q.shape[0], "frequencies()")
         return modal.frequencies(self, Q, y, n_modes=n_modes, check_bounds=check_bounds,
-                                 data=self.workspace(data))
+                                 data=self.workspace(data),
+                                 preload=make_preload(self, gravity, loads, preload))
 
     def eigvals_from(self, M: np.ndarray, K: np.ndarray) -> np.ndarray:
         """Non-rigid eigenvalues λ [rad²/s²] of stacked matrix pairs (..., ndof, ndof).
@@ -762,7 +775,8 @@ class FlexibleModel:
         return modal.eigvals_from(self, M, K)
 
     def modes(self, q, y=None, *, n_modes: int | None = None, check_bounds=True,
-              data: FlexibleData | None = None):
+              data: FlexibleData | None = None, gravity=None, loads=None,
+              preload: Preload | None = None):
         """Eigenfrequencies, mass-normalised mode shapes and nodal motion at one pose.
 
         Solves ``K φ = λ M φ`` with the free joints' coordinates condensed out, in the
@@ -778,15 +792,20 @@ class FlexibleModel:
             n_modes: Number of lowest modes to compute (default: all ``nx``).
             check_bounds: Raise when a design value leaves its bounds.
             data: Workspace (default: this thread's, see :meth:`workspace`).
+            gravity: Gravity preload (3,) [m/s²] (see :meth:`frequencies`).
+            loads: Dead point forces of the preload (see :meth:`frequencies`).
+            preload: A :class:`~pinflex.Preload` instead of ``gravity`` and ``loads``.
 
         Returns:
             :class:`ModalResult`: ``freq_hz`` [Hz], ``eigvals`` [rad²/s²], ``shapes`` over
-            ``[x; q]`` (ndof, k) normalised to ``φᵀ M φ = 1``, nodal positions [m] and motion.
-            ``print(result)`` shows a short table.
+            ``[x; q]`` (ndof, k) normalised to ``φᵀ M φ = 1``, nodal positions [m] and motion,
+            ``preload`` (None without one). ``print(result)`` shows a short table.
 
         Raises:
             ConfigurationError: Wrong number of joint values or several poses.
             EigenSolverError: Singular mass matrix or an unrestrained structure.
+            PreloadNotInEquilibrium: A preload loads a free joint (lock it or spring it).
+            PreloadBuckles: The preload makes the arm unstable.
         """
         n_modes = check_n_modes(self, n_modes)
         if y is not None and not isinstance(y, dict):
@@ -799,4 +818,5 @@ class FlexibleModel:
                     f"({', '.join(self.design_names)}), got an array of shape {y.shape}"
                 )
         return modal.modes(self, q, y, n_modes=n_modes, check_bounds=check_bounds,
-                           data=self.workspace(data))
+                           data=self.workspace(data),
+                           preload=make_preload(self, gravity, loads, preload))
