@@ -256,7 +256,7 @@ def test_one_pose_root_twists_equal_the_general_walk(models):
     continuous, prismatic and fixed joints, planar and spatial.
     """
     for name, model, q in models:
-        terms = model.pose_terms(model.check_q(q)[None])
+        terms = kinematics.pose_terms(model, check_q(model, q)[None])
         plan = solve.solve_plan(model)
         ref = solve.root_twists(model, plan, terms, 1)
         got = one_pose.root_twists_one(model, plan, terms)

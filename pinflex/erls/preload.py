@@ -52,6 +52,7 @@ import numpy as np
 import pinocchio as pin
 
 from pinflex import beam
+from pinflex.erls import kinematics
 from pinflex.erls.plan import attachment
 from pinflex.erls.terms import BatchAlgebra, twist_at
 from pinflex.exceptions import ConfigurationError, PreloadNotInEquilibrium
@@ -403,8 +404,8 @@ def generalized_load(model, groups, q: np.ndarray, data) -> np.ndarray:
     nx, nv = model.nx, model.nv
     ws = model.workspace(data)
     frames = _link_frames(model, q, {g.link for g in groups}, ws.pin)
-    terms = model.pose_terms(q[None], data=ws)
-    e = model.root_twists(terms, BatchAlgebra(1))
+    terms = kinematics.pose_terms(model, q[None], data=ws)
+    e = kinematics.root_twists(model, terms, BatchAlgebra(1))
     F = np.zeros(nx + nv)
     for gr, T in zip(groups, _twists(groups, e)):
         J, Rl = frames[gr.link]
@@ -421,8 +422,8 @@ def _second_order(model, groups, q: np.ndarray, data) -> np.ndarray:
     ws = model.workspace(data)
     frames = _link_frames(model, q, plan.links, ws.pin)
     R = {link: fr[1] for link, fr in frames.items()}
-    terms = model.pose_terms(q[None], data=ws)
-    e1 = model.root_twists(terms, BatchAlgebra(1))
+    terms = kinematics.pose_terms(model, q[None], data=ws)
+    e1 = kinematics.root_twists(model, terms, BatchAlgebra(1))
     e = {link: (None if v is None else v[0]) for link, v in e1.items()}
     line: dict = {}
     force: dict = {}
@@ -509,8 +510,8 @@ def _displaced_pivots(model, groups, q: np.ndarray, data, H: np.ndarray) -> None
     plan, nx = model.plan, model.nx
     ws = model.workspace(data)
     frames = _link_frames(model, q, plan.links, ws.pin)
-    terms = model.pose_terms(q[None], data=ws)
-    e1 = model.root_twists(terms, BatchAlgebra(1))
+    terms = kinematics.pose_terms(model, q[None], data=ws)
+    e1 = kinematics.root_twists(model, terms, BatchAlgebra(1))
     by_link: dict[str, list] = {}
     for gr in groups:
         by_link.setdefault(gr.link, []).append(gr)
@@ -575,9 +576,10 @@ def preload_stiffness(model, Q: np.ndarray, preload: Preload, y: np.ndarray,
         H, F = preload_hessian(model, groups, q, data)
         if free:
             _check_free(model, groups, q, data, H, F, free, Ci)
-        terms = model.pose_terms(q[None], data=data)
+        terms = kinematics.pose_terms(model, q[None], data=data)
         alg = BatchAlgebra(1)
-        T = joint_conditions.transform(model, terms, alg, model.root_twists(terms, alg))
+        T = joint_conditions.transform(model, terms, alg,
+                                       kinematics.root_twists(model, terms, alg))
         out[i] = H if T is None else T[0].T @ H @ T[0]
     return out
 
