@@ -81,8 +81,8 @@ def _save_npz(path: Path, arrays: dict) -> Path:
     from pinflex.outputs import atomic_path
 
     with atomic_path(path, "simulation data") as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
+        with open(tmp, "wb") as stream:
+            np.savez(stream, **arrays)
     return path
 
 
