@@ -27,7 +27,7 @@ from pinflex.linalg import readonly as _readonly
 
 from ..exceptions import ConfigurationError, InvalidChain, NewtonDivergence
 from .beams import Planform, chain_segments
-from .elastica import BOUNDARIES
+from .elastica import check_end_loads
 
 
 @dataclass(frozen=True)
@@ -280,20 +280,12 @@ def solve_tip_statics(chain: PrbdmChain, force_n: np.ndarray, theta0: np.ndarray
         ConfigurationError: If ``theta0`` has the wrong shape, the boundary is unknown, a moment
             is applied to a guided end, or a guided chain has fewer than 2 joints.
     """
-    force = np.asarray(force_n, dtype=float)
-    if force.shape != (2,) or not np.all(np.isfinite(force)):
-        raise ConfigurationError(f"force_n must be a finite (Fx, Fz) pair [N], got {force_n!r}")
-    moment = float(moment_nm)
-    if not np.isfinite(moment):
-        raise ConfigurationError(f"moment_nm = {moment_nm!r} must be a finite moment [N m]")
-    if boundary not in BOUNDARIES:
-        raise ConfigurationError(f"boundary = {boundary!r}; expected one of {BOUNDARIES}")
+    force, moment = check_end_loads(force_n, moment_nm, boundary, ConfigurationError)
     guided = boundary == "fixed-guided"
-    if guided and (moment != 0.0 or chain.n_joints < 2):
+    if guided and chain.n_joints < 2:
         raise ConfigurationError(
-            "a fixed-guided end holds the end link's angle: it takes no applied moment "
-            f"(got {moment:g} N m) and needs at least 2 joints (the chain has "
-            f"{chain.n_joints})")
+            "a fixed-guided end holds the end link's angle: the chain needs at least 2 joints "
+            f"(it has {chain.n_joints})")
     if int(load_steps) != load_steps or load_steps < 1:
         raise ConfigurationError(f"load_steps = {load_steps!r} must be a positive integer")
     data = chain.model.createData() if data is None else data

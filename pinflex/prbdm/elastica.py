@@ -120,6 +120,28 @@ def _integrate_elastica(planform: Planform, force: np.ndarray, end_state: tuple[
     return state, np.array([low, high, h_min, h_max])
 
 
+def check_end_loads(force_n, moment_nm, boundary: str,
+                    error: type[Exception]) -> tuple[np.ndarray, float]:
+    """The end force (2,) [N] and moment [N m], checked; ``error`` names what is wrong.
+
+    Raises:
+        error: If the force is not a finite (Fx, Fz) pair, the moment not finite, the boundary
+            unknown, or a moment applied to a fixed-guided end (the guide takes it).
+    """
+    force = np.asarray(force_n, dtype=float)
+    if force.shape != (2,) or not np.all(np.isfinite(force)):
+        raise error(f"force_n must be a finite (Fx, Fz) pair [N], got {force_n!r}")
+    moment = float(moment_nm)
+    if not np.isfinite(moment):
+        raise error(f"moment_nm = {moment_nm!r} must be a finite end moment [N m]")
+    if boundary not in BOUNDARIES:
+        raise error(f"boundary = {boundary!r}; expected one of {BOUNDARIES}")
+    if boundary == "fixed-guided" and moment != 0.0:
+        raise error("a fixed-guided end holds its rotation and takes no applied moment (the "
+                    f"guide's moment is a reaction): got moment_nm = {moment:g}")
+    return force, moment
+
+
 class _Shooting:
     """The end-load shooting problem in one unknown u (nondimensional end state)."""
 
@@ -213,17 +235,7 @@ def end_load_equilibrium(planform: Planform, force_n: np.ndarray, moment_nm: flo
             applied to a guided end (the guide takes it).
         TruthNotConverged: If continuation stalls or ends off the stable (physical) branch.
     """
-    force = np.asarray(force_n, dtype=float)
-    if force.shape != (2,) or not np.all(np.isfinite(force)):
-        raise InvalidBeam(f"force_n must be a finite (Fx, Fz) pair [N], got {force_n!r}")
-    moment = float(moment_nm)
-    if not np.isfinite(moment):
-        raise InvalidBeam(f"moment_nm = {moment_nm!r} must be a finite end moment [N m]")
-    if boundary not in BOUNDARIES:
-        raise InvalidBeam(f"boundary = {boundary!r}; expected one of {BOUNDARIES}")
-    if boundary == "fixed-guided" and moment != 0.0:
-        raise InvalidBeam("a fixed-guided end holds its rotation: its moment is a reaction, "
-                          "not a load; give moment_nm = 0")
+    force, moment = check_end_loads(force_n, moment_nm, boundary, InvalidBeam)
     if not np.isfinite(max_load_step) or max_load_step <= 0.0:
         raise InvalidBeam(f"max_load_step = {max_load_step!r} must be positive")
     length = planform.length_m
