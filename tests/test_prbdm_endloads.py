@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import quad, solve_ivp
 from scipy.optimize import brentq, newton
 
-from pinflex.exceptions import ConfigurationError, InvalidChain
+from pinflex.exceptions import ConfigurationError, InvalidChain, TruthNotConverged
 from pinflex.prbdm.beams import random_beam, uniform_beam
 from pinflex.prbdm.chain import build_chain, solve_tip_statics, tip_position
 from pinflex.prbdm.elastica import end_load_equilibrium
@@ -96,7 +96,7 @@ def test_tip_moment_rotation_on_random_beam():
 
 CASES = [(2.0, 30.0, 0.0), (10.0, 60.0, 0.0), (10.0, 120.0, 0.0), (10.0, 135.0, 0.0),
          (5.0, 150.0, 0.0), (2.0, 90.0, 1.0), (5.0, 135.0, 1.0), (10.0, 45.0, -1.0),
-         (10.0, 90.0, 3.0), (5.0, -60.0, 2.0)]
+         (10.0, 90.0, 3.0), (5.0, -60.0, 2.0), (5.0, 160.0, 0.0), (10.0, 170.0, 0.0)]
 
 
 @pytest.mark.parametrize("alpha, angle, beta", CASES)
@@ -119,6 +119,18 @@ def test_inclined_loads_on_random_beam_match_independent_shooting(angle, beta):
     ref = _reference(beam, case.force_n(beam), case.moment_nm(beam))
     assert np.max(np.abs(sol.tip_m - ref[:2])) < 1e-8 * beam.length_m
     assert sol.tip_rotation_rad == pytest.approx(ref[2], abs=1e-8)
+
+
+def test_snap_through_of_the_load_path_is_refused():
+    """A fold of the proportional load path raises TruthNotConverged.
+
+    alpha = 10 at 90 deg with beta = 10: three equilibria at 0.64 of the load, one at 0.66
+    (counted by sign changes of the clamp residual over the end rotation; docs/prbdm.md), so
+    the equilibrium snaps; the truth refuses by name instead of returning either side.
+    """
+    beam = uniform_beam()
+    with pytest.raises(TruthNotConverged, match="stalled"):
+        case_truth(beam, LoadCase(alpha=10.0, angle_deg=90.0, beta=10.0))
 
 
 # -- truth: fixed-guided beam ---------------------------------------------------------------

@@ -254,13 +254,32 @@ def end_load_equilibrium(planform: Planform, force_n: np.ndarray, moment_nm: flo
         return _solution(shooting, solved, boundary)
     level = max(magnitude * length**2 / ei_eq, abs(moment) * length / ei_eq)
     root_level = math.sqrt(level)
-    # Continuation parameter t in [0, sqrt(level)]; the load fraction is (t / sqrt(level))^2.
-    history: list[tuple[float, float]] = [(0.0, 0.0)]
-    t, step = 0.0, min(max_load_step, root_level)
+    first = min(max_load_step, root_level)
     if moment != 0.0 or boundary == "fixed-guided":
         # The unknown of these loads can turn back as the load grows (a moment against the
         # force): start small so that the predictions follow it.
-        step = min(step, 0.25 * max_load_step)
+        first = min(first, 0.25 * max_load_step)
+    result, stalled = _continuation(shooting, root_level, first, max_load_step)
+    if result is None:
+        # A stiffening or softening response (a nearly compressive force) can defeat the
+        # predictions from the unloaded state: start again with a small first step.
+        result, stalled = _continuation(shooting, root_level, first / 16.0, max_load_step)
+    if result is None:
+        raise TruthNotConverged(
+            f"elastica continuation stalled at {stalled:.4g} of end force {force} N, end "
+            f"moment {moment:g} N m ({boundary}, load level {level:.4g})")
+    _check_physical(force, moment, boundary, result[2], shooting.stable(result[2]))
+    return _solution(shooting, result, boundary)
+
+
+def _continuation(shooting: _Shooting, root_level: float, first_step: float,
+                  max_load_step: float):
+    """Continue from zero load to the full load; (answer, None) or (None, stalled fraction).
+
+    The parameter is t in [0, sqrt(level)], the load fraction (t / sqrt(level))^2.
+    """
+    history: list[tuple[float, float]] = [(0.0, 0.0)]
+    t, step = 0.0, first_step
     result = None
     while t < root_level * (1.0 - 1e-14):
         t_new = min(root_level, t + step)
@@ -269,17 +288,13 @@ def end_load_equilibrium(planform: Planform, force_n: np.ndarray, moment_nm: flo
         if solved is None:
             step *= 0.5
             if step < 1e-6 * max(root_level, 1.0):
-                raise TruthNotConverged(
-                    f"elastica continuation stalled at {frac:.4g} of end force {force} N, "
-                    f"end moment {moment:g} N m ({boundary}, load level {level:.4g})")
+                return None, frac
             continue
         history.append((t_new, solved[0]))
         result = solved
         t = t_new
         step = min(max_load_step, 1.5 * step)
-    assert result is not None
-    _check_physical(force, moment, boundary, result[2], shooting.stable(result[2]))
-    return _solution(shooting, result, boundary)
+    return result, None
 
 
 def _continuation_step(shooting: _Shooting, history: list[tuple[float, float]], t_new: float,
