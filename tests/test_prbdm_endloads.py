@@ -15,7 +15,12 @@ import pytest
 from scipy.integrate import quad, solve_ivp
 from scipy.optimize import brentq, newton
 
-from pinflex.exceptions import ConfigurationError, InvalidChain, TruthNotConverged
+from pinflex.exceptions import (
+    ConfigurationError,
+    InvalidChain,
+    NewtonDivergence,
+    TruthNotConverged,
+)
 from pinflex.prbdm.beams import random_beam, uniform_beam
 from pinflex.prbdm.chain import build_chain, solve_tip_statics, tip_position
 from pinflex.prbdm.elastica import end_load_equilibrium
@@ -290,6 +295,34 @@ def test_howell_fixed_guided_statics_closed_form(alpha):
     assert 2.0 * k * theta == pytest.approx(p * gamma * length * math.cos(theta), rel=1e-9)
     assert res.end_moment_nm == pytest.approx(-k * theta - p * (1 - gamma) * length / 2,
                                               rel=1e-9)
+
+
+def test_force_with_moment_never_silently_leaves_the_continuation_branch():
+    """Under a force with a moment 4 load steps raise or give the 200-step answer.
+
+    There is no branch check for these loads; random 1R-5R chains, moments up to 10 against
+    and with the force, forces up to 170 deg.
+    """
+    beam = uniform_beam()
+    ei = E_STEEL * beam.width_m(0.0) * beam.thickness_m**3 / 12.0
+    rng = np.random.default_rng(1)
+    cases = [LoadCase(10, 90, 3), LoadCase(10, 90, -3), LoadCase(10, 45, -5),
+             LoadCase(10, 135, 5), LoadCase(5, 170, 2), LoadCase(2, 90, 10)]
+    compared = 0
+    for _ in range(12):
+        n = int(rng.integers(1, 6))
+        gamma = 0.02 + (1 - 0.02 * (n + 1)) * rng.dirichlet(np.ones(n + 1))
+        chain = build_chain(beam, gamma, ei * n * rng.uniform(1.5, 5.0, n))
+        for case in cases:
+            load = (case.force_n(beam), case.moment_nm(beam))
+            try:
+                coarse = solve_tip_statics(chain, load[0], load_steps=4, moment_nm=load[1])
+            except NewtonDivergence:
+                continue
+            fine = solve_tip_statics(chain, load[0], load_steps=200, moment_nm=load[1])
+            assert np.allclose(coarse.tip_m, fine.tip_m, rtol=0.0, atol=1e-9)
+            compared += 1
+    assert compared >= 60
 
 
 def test_chain_statics_refuse_bad_end_conditions():
