@@ -83,6 +83,7 @@ if TYPE_CHECKING:
     )
     from pinflex.description import RobotDescription, load
     from pinflex.erls import FlexibleData, FlexibleModel, ModalResult
+    from pinflex.erls.preload import PointForce, Preload
     from pinflex.erls.robots import example_robot
     from pinflex.exceptions import PinflexError, PinflexWarning
     from pinflex.materials import Material
