@@ -367,18 +367,26 @@ def test_zero_preload_equals_the_plain_modes_on_the_ur5_overlay():
     assert f == pytest.approx(model.frequencies(Q_UR5, n_modes=6), rel=1e-10)
 
 
-def test_joint_terms_equal_pinocchios_gravity_and_its_derivatives():
+@pytest.mark.parametrize("arm", ["ur5", "slider"])
+def test_joint_terms_equal_pinocchios_gravity_and_its_derivatives(arm):
     """The generalized static load on the joints and its Hessian equal Pinocchio's generalized
-    gravity and ``computeGeneralizedGravityDerivatives`` of the same inertias (UR5, 1e-9)."""
+    gravity and ``computeGeneralizedGravityDerivatives`` of the same inertias (1e-12, 1e-9):
+    the UR5 overlay, and a prismatic-revolute arm with tilted joints (tests/arms.py)."""
+    from arms import PRISMATIC
+
+    from pinflex.description import parse
     from pinflex.erls import preload as pl
 
-    model = FlexibleModel("urdf/ur5_flexible.xml", joints="locked")
+    if arm == "ur5":
+        model, q = FlexibleModel("urdf/ur5_flexible.xml", joints="locked"), Q_UR5
+    else:
+        model, q = FlexibleModel(parse(PRISMATIC), joints="locked"), np.array([0.2, 0.7, -0.4])
     groups = pl.static_loads(model, Preload((0.0, 0.0, -9.81)), model.y0)
-    H, F = pl.preload_hessian(model, groups, Q_UR5, None)
+    H, F = pl.preload_hessian(model, groups, q, None)
     rigid = model.effective_model()
     data = rigid.createData()
     rigid.gravity.linear = np.array([0.0, 0.0, -9.81])
-    qp = model.pin_configuration(Q_UR5)
+    qp = model.pin_configuration(q)
     grav = pin.computeGeneralizedGravity(rigid, data, qp)
     dgrav = pin.computeGeneralizedGravityDerivatives(rigid, data, qp)
     nx = model.nx
