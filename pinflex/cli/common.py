@@ -98,18 +98,11 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--planar", action="store_true", help="keep in-plane elastic dofs only")
 
 
-def speed_terms(args: argparse.Namespace, gravity=None) -> str | None:
-    """The terms of ``--terms`` / ``--at-speed`` (None: the frozen-pose model).
-
-    ``gravity`` (``--gravity`` of ``modes``) is refused without ``--terms full``.
-    """
+def speed_terms(args: argparse.Namespace) -> str | None:
+    """The terms of ``--terms`` / ``--at-speed`` (None: the frozen-pose model)."""
     from pinflex.exceptions import ConfigurationError
 
     if args.at_speed and args.terms not in (None, "full"):
         raise ConfigurationError(f"--at-speed is --terms full; it does not go with --terms "
                                  f"{args.terms}")
-    terms = "full" if args.at_speed else args.terms
-    if gravity is not None and terms != "full":
-        raise ConfigurationError("--gravity loads the beams axially in the modes at speed: give "
-                                 "it with --terms full (eq. (1)'s modes do not depend on it)")
-    return terms
+    return "full" if args.at_speed else args.terms

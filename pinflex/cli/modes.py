@@ -41,9 +41,6 @@ def add_parser(sub) -> None:
                    "finite differences of the samples (samples, default) or from the "
                    "rest-to-rest quintic spline through them that pinflex simulate drives "
                    "(motion)")
-    p.add_argument("--gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
-                   help="with --terms full: gravity [m/s^2] in world axes, whose axial loads "
-                   "stiffen or soften the beams (default none)")
     p.add_argument("--strict", action="store_true",
                    help="with --trajectory: refuse a motion too fast for eq. (1) (validity "
                    "indicator above its threshold) instead of warning")
@@ -74,9 +71,9 @@ def cmd_modes(args: argparse.Namespace) -> int:
             raise ConfigurationError("--tol picks the elements at one pose (--q); it does not "
                                      "go with --trajectory")
         return _along(model, args)
-    if args.csv or args.png is not None or speed_terms(args, args.gravity) or args.strict:
-        raise ConfigurationError("--csv, --png, --terms, --at-speed, --gravity and --strict go "
-                                 "with --trajectory")
+    if args.csv or args.png is not None or speed_terms(args) or args.strict:
+        raise ConfigurationError("--csv, --png, --terms, --at-speed and --strict go with "
+                                 "--trajectory")
     q = np.array(args.q if args.q is not None else np.zeros(model.nv), dtype=float)
     fidelity = None
     if args.tol is not None:
@@ -212,7 +209,7 @@ def _along(model, args: argparse.Namespace) -> int:
     traj = Trajectory.from_csv(args.trajectory, joint_names=model.joint_names)
     bar = ProgressBar(traj.n_samples, "modes along: samples",
                       enabled=not args.no_progress and sys.stderr.isatty())
-    terms = speed_terms(args, args.gravity)
+    terms = speed_terms(args)
     res: Any
     if terms is None and args.rates != "samples":
         from pinflex.exceptions import ConfigurationError
@@ -225,7 +222,7 @@ def _along(model, args: argparse.Namespace) -> int:
         from pinflex.dynamics import ErlsDynamics
         from pinflex.dynamics.modes import modes_at_speed_along
 
-        res = modes_at_speed_along(ErlsDynamics(model, gravity=args.gravity), traj,
+        res = modes_at_speed_along(ErlsDynamics(model), traj,
                                    terms=terms, n_modes=args.modes or 3, rates=args.rates,
                                    strict=args.strict, progress=bar)
     bar.close()
