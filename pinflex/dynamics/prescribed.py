@@ -129,6 +129,9 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     Z = np.vstack([np.eye(nx), A])
     K_eq1 = Z.T @ K @ Z
     if terms == "full":
+        from pinflex.dynamics.speed_scope import check_full_terms
+
+        check_full_terms(dyn, q, qd, qdd)  # joints on deforming links: refused by name
         K = K + speed_stiffness(dyn, q, qd, qdd)
     C = np.tensordot(qd, Ck, axes=(0, 0))
     zq = np.concatenate([np.zeros(nx), qd])
