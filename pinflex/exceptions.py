@@ -192,6 +192,16 @@ class SoftSpringWarning(PinflexWarning):
     """A joint spring too soft to matter is treated as a free joint (see erls.joints)."""
 
 
+class PreloadBendingWarning(PinflexWarning):
+    """A preload bends links across their axes: beyond mode 1 its shifts are not reliable.
+
+    The preload keeps the axial-force stiffness and the loads' terms on the joints; what the
+    static deflection does to a link bent across its axis (its stiffness turned with the
+    deflected shape, the shear-force prestress) is left out, and it dominates the shifts of
+    the higher modes there (``python benchmarks/bench_preload_frame.py``).
+    """
+
+
 class UnsolvedLoadWarning(PinflexWarning):
     """A PRBDM chain's tip statics found no equilibrium under a load (counted as 100 % error).
 

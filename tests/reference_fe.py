@@ -894,3 +894,111 @@ def spatial_frame_frequencies_extended(
     Mr = Phi.T @ (model.M @ Phi)
     lam = scipy.linalg.eigh(_sym(Kr.astype(float)), _sym(Mr.astype(float)), eigvals_only=True)
     return np.sqrt(lam[r : r + k]) / (2.0 * math.pi)
+
+
+def planar_chain_tangent(
+    angles: Sequence[float],
+    lengths: Sequence[float],
+    n_elements: Sequence[int],
+    *,
+    EI: float,
+    EA: float,
+    rhoA: float,
+    gravity: Sequence[float],
+    end_masses: Sequence[float],
+    joints: Sequence,
+) -> np.ndarray:
+    """Tangent stiffness of a planar chain at its static state under its weight, geometrically
+    exact (corotational elements), dofs as :func:`planar_chain_matrices`.
+
+    Each element's chord turns by ``β − β₀``; its local axial stretch ``l − l₀`` and end
+    rotations ``θ − (β − β₀)`` carry the linear element forces (Crisfield's corotational
+    beam: exact for large rigid motions, small strains). The weight is a dead load with the
+    potential of the element's cubic shape, ``−w·(x_a + x_b)/2 − (w·n) l₀ (θ_a − θ_b)/12``.
+    The static state is found by Newton with every joint held at the pose (springs
+    compensated, as a servo does); the tangent there is the central difference of the total
+    force (step 1e-7), springs added on the joints' relative rotations.
+
+    Returns:
+        ``K_t`` (n, n) [N/m, N, N m].
+    """
+    held = ["clamped"] * len(angles)
+
+    def positions():
+        out, start = [], np.zeros(2)
+        for a, length, n in zip(angles, lengths, n_elements):
+            e = np.array([math.cos(a), math.sin(a)])
+            out.append(np.array([start + e * length * k / n for k in range(n + 1)]))
+            start = start + e * length
+        return out
+
+    X = positions()
+    g = np.asarray(gravity, dtype=float)
+
+    def force(d, dofs, springs):
+        G = np.zeros(d.size)
+
+        def at(i):
+            return d[i] if i >= 0 else 0.0
+
+        for i, (a0, length, n) in enumerate(zip(angles, lengths, n_elements)):
+            l0 = length / n
+            w = rhoA * l0 * g
+            for el in range(n):
+                ia, ib = dofs[i][el], dofs[i][el + 1]
+                xa = X[i][el] + [at(ia[0]), at(ia[1])]
+                xb = X[i][el + 1] + [at(ib[0]), at(ib[1])]
+                dx = xb - xa
+                length_now = float(np.hypot(*dx))
+                c, s = dx / length_now
+                turn = math.atan2(s, c) - a0
+                ta, tb = at(ia[2]) - turn, at(ib[2]) - turn
+                N = EA * (length_now - l0) / l0
+                M1, M2 = EI / l0 * (4 * ta + 2 * tb), EI / l0 * (2 * ta + 4 * tb)
+                r = np.array([-c, -s, 0.0, c, s, 0.0])
+                z = np.array([s, -c, 0.0, -s, c, 0.0]) / length_now
+                f = r * N + (np.eye(6)[2] - z) * M1 + (np.eye(6)[5] - z) * M2
+                nvec, evec = np.array([-s, c]), np.array([c, s])
+                f[[0, 1]] -= w / 2
+                f[[3, 4]] -= w / 2
+                f[2] -= (w @ nvec) * l0 / 12
+                f[5] += (w @ nvec) * l0 / 12
+                f += (w @ evec) * l0 * (at(ia[2]) - at(ib[2])) / 12 * z
+                idx = np.concatenate([ia, ib])
+                np.add.at(G, idx[idx >= 0], f[idx >= 0])
+        for i, m in enumerate(end_masses):
+            tip = dofs[i][-1, :2]
+            np.add.at(G, tip[tip >= 0], -m * g[tip >= 0])
+        for child, parent, k in springs:
+            rel = d[child] - (d[parent] if parent >= 0 else 0.0)
+            G[child] += k * rel
+            if parent >= 0:
+                G[parent] -= k * rel
+        return G
+
+    def tangent(d, dofs, springs, h=1e-7):
+        K = np.zeros((d.size, d.size))
+        for k in range(d.size):
+            step = np.zeros(d.size)
+            step[k] = h
+            K[:, k] = (force(d + step, dofs, springs) - force(d - step, dofs, springs)) / (2 * h)
+        return _sym(K)
+
+    dofs_h = planar_chain_dofs(n_elements, held)
+    d = np.zeros(int(max(t.max() for t in dofs_h)) + 1)
+    for _ in range(30):
+        G = force(d, dofs_h, [])
+        if np.abs(G).max() < 1e-9:
+            break
+        d -= np.linalg.solve(tangent(d, dofs_h, []), G)
+    dofs = planar_chain_dofs(n_elements, joints)
+    dj = np.zeros(int(max(t.max() for t in dofs)) + 1)
+    for th, tj in zip(dofs_h, dofs):  # a held base rotation stays 0 in the sprung layout
+        for a, b in zip(th.ravel(), tj.ravel()):
+            if a >= 0 and b >= 0:
+                dj[b] = d[a]
+    springs = []
+    for i, spec in enumerate(joints):
+        if _joint_kind(spec, f"joint {i}") == "spring":
+            springs.append((dofs[i][0, 2], dofs[i - 1][-1, 2] if i > 0 else -1, float(spec)))
+    return tangent(dj, dofs, springs)

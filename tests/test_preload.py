@@ -14,6 +14,7 @@ import contextlib
 import functools
 import json
 import math
+import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -27,6 +28,7 @@ from pinflex.exceptions import (
     ConfigurationError,
     PinflexWarning,
     PlausibilityWarning,
+    PreloadBendingWarning,
     PreloadBuckles,
     PreloadNotInEquilibrium,
 )
@@ -344,7 +346,8 @@ def test_free_joint_under_load_is_refused(tmp_path):
         "shoulder_lift_joint": "locked", "elbow_joint": "locked", "wrist_1_joint": "locked",
         "wrist_2_joint": "locked", "wrist_3_joint": "locked"})
     assert ur5.n_rigid == 1  # the pan joint's axis is vertical
-    f = ur5.frequencies([0.3, -1, 1.2, -0.5, 0.4, 0.2], gravity=[0, 0, -9.81], n_modes=3)
+    with pytest.warns(PreloadBendingWarning, match="upper_arm_link"):
+        f = ur5.frequencies([0.3, -1, 1.2, -0.5, 0.4, 0.2], gravity=[0, 0, -9.81], n_modes=3)
     assert np.all(f > 0)
 
 
@@ -404,17 +407,33 @@ def test_batched_poses_springs_and_design_values():
     rng = np.random.default_rng(3)
     Q = rng.uniform(-1.0, 1.0, (3, model.nv))
     g = [0.0, 0.0, -9.81]
-    batch = model.frequencies(Q, gravity=g, n_modes=4)
-    for q, row in zip(Q, batch):
-        assert row == pytest.approx(model.frequencies(q, gravity=g, n_modes=4), rel=1e-12)
-    assert np.abs(batch / model.frequencies(Q, n_modes=4) - 1).max() > 1e-4
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PreloadBendingWarning)  # asserted elsewhere
+        batch = model.frequencies(Q, gravity=g, n_modes=4)
+        for q, row in zip(Q, batch):
+            assert row == pytest.approx(model.frequencies(q, gravity=g, n_modes=4), rel=1e-12)
+        assert np.abs(batch / model.frequencies(Q, n_modes=4) - 1).max() > 1e-4
     d = next(d for d in model.design if d.kind == "parameter")
     value = 0.5 * (d.nominal + d.upper)
     y = model.y0.copy()
     y[model.design_names.index(d.name)] = value
     moved = model.with_values({d.name: value})
-    assert model.frequencies(Q[0], y, gravity=g, n_modes=4) == pytest.approx(
-        moved.frequencies(Q[0], gravity=g, n_modes=4), rel=1e-9)
+    with pytest.warns(PreloadBendingWarning):
+        ours = model.frequencies(Q[0], y, gravity=g, n_modes=4)
+    with pytest.warns(PreloadBendingWarning):
+        assert ours == pytest.approx(moved.frequencies(Q[0], gravity=g, n_modes=4), rel=1e-9)
+
+
+def test_bent_links_are_named_and_columns_are_not(tmp_path):
+    """A preload across a link (a tilted column) warns with the link and its share of load
+    across the axis; along the axis (the upright column) it does not."""
+    model = column(tmp_path, 6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PreloadBendingWarning)
+        model.frequencies([0.0], gravity=[0, 0, -9.81])
+    g = 9.81 * np.array([0.0, math.sin(0.3), -math.cos(0.3)])  # 0.3 rad off the axis
+    with pytest.warns(PreloadBendingWarning, match=r"'beam' \(30%\)"):
+        model.frequencies([0.0], gravity=g)
 
 
 def test_preload_arguments_are_checked(tmp_path):

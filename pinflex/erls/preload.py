@@ -55,7 +55,11 @@ from pinflex import beam
 from pinflex.erls import kinematics
 from pinflex.erls.plan import attachment
 from pinflex.erls.terms import BatchAlgebra, twist_at
-from pinflex.exceptions import ConfigurationError, PreloadNotInEquilibrium
+from pinflex.exceptions import (
+    ConfigurationError,
+    PreloadBendingWarning,
+    PreloadNotInEquilibrium,
+)
 from pinflex.linalg import skew
 from pinflex.validation import require_array
 
@@ -71,6 +75,10 @@ STEP = 1e-3
 
 #: Relative size (to the loads' scale) below which a free joint counts as unloaded.
 NEUTRAL_RTOL = 1e-9
+
+#: Share of a beam's outboard load across its axis above which the preload warns
+#: (:class:`~pinflex.exceptions.PreloadBendingWarning`).
+BENDING_SHARE = 1e-6
 
 # two-point Gauss-Legendre on [0, 1]: exact for the beam's weight on the cubic fields
 _GXI = 0.5 + np.array([-0.5, 0.5]) / np.sqrt(3.0)
@@ -572,7 +580,10 @@ def preload_stiffness(model, Q: np.ndarray, preload: Preload, y: np.ndarray,
     free = [i for i, c in enumerate(lay.conditions) if c.kind == "free"]
     Ci = np.linalg.inv(model.coord_map)
     out = np.zeros((Q.shape[0], model.ndof, model.ndof))
+    bent: dict[str, float] = {}
     for i, q in enumerate(Q):
+        for link, share in _bent_beams(model, groups, q, data).items():
+            bent[link] = max(share, bent.get(link, 0.0))
         H, F = preload_hessian(model, groups, q, data)
         if free:
             _check_free(model, groups, q, data, H, F, free, Ci)
@@ -581,6 +592,47 @@ def preload_stiffness(model, Q: np.ndarray, preload: Preload, y: np.ndarray,
         T = joint_conditions.transform(model, terms, alg,
                                        kinematics.root_twists(model, terms, alg))
         out[i] = H if T is None else T[0].T @ H @ T[0]
+    if bent:
+        import warnings
+
+        said = ", ".join(f"'{k}' ({v:.0%})" for k, v in bent.items())
+        warnings.warn(
+            f"the preload bends link(s) {said} across their axes (share of the outboard load "
+            "across the axis): the preload keeps the axial forces' stiffness and the loads' "
+            "terms on the joints, not what the static deflection does to a bent link (its "
+            "stiffness turned with the deflected shape, the shear prestress). On benchmark "
+            "A's bent arm that left mode 1's shift within 7 % of a geometrically exact "
+            "tangent and the higher modes' off by factors (benchmarks/bench_preload_frame.py)",
+            PreloadBendingWarning, stacklevel=4)
+    return out
+
+
+def _bent_beams(model, groups, q: np.ndarray, data) -> dict[str, float]:
+    """``{beam: share}`` of the beams whose outboard load has a share across their axis
+    above :data:`BENDING_SHARE` at one pose (share = |transverse| / |total| of the load)."""
+    plan = model.plan
+    ws = model.workspace(data)
+    frames = _link_frames(model, q, plan.links, ws.pin)
+    R = {link: fr[1] for link, fr in frames.items()}
+    force: dict = {}
+    line = {link: (np.zeros(3), np.zeros((3, 3))) for link in plan.beams}
+    for gr in groups:
+        fL = -(gr.f @ R[gr.link])
+        if gr.on_axis:
+            spec = plan.beams[gr.link].spec
+            line[gr.link] = (line[gr.link][0] + fL.sum(axis=0) / (spec.rhoA * spec.length_m),
+                             np.zeros((3, 3)))
+        else:
+            force.setdefault(gr.link, []).append((gr.c, fL))
+    subtree = subtree_resultants(plan, R, line, force)
+    out = {}
+    for link, bp in plan.beams.items():
+        total = R[link].T @ subtree[link]  # link axes
+        ex = bp.spec.tip / bp.spec.length_m
+        size = float(np.linalg.norm(total))
+        across = float(np.linalg.norm(total - (total @ ex) * ex))
+        if size > 0.0 and across > BENDING_SHARE * size:
+            out[link] = across / size
     return out
 
 
