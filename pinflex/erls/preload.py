@@ -31,10 +31,16 @@ map ``T``):
   (``F_w`` the outboard loads weighted by the share of ``t`` their nodes carry): without it two
   beams on a locked joint are 9 % off the one column they form (tested to 2e-9 with it).
 
-Left out, as in the beam's ``K_G``: torsion, shear and bending-moment prestress, and the
-loads' moments about a joint across its axis (exact where those moments vanish or lie along
-the axes: columns, pendula, planar arms loaded in their plane). The static deflection itself
-is taken small (the loads' second variation at the undeformed pose).
+Left out, as in the beam's ``K_G``: torsion, shear and bending-moment prestress, the loads'
+moments about a joint across its axis, and what the static deflection does to a link bent
+across its axis (its stiffness turned with the deflected shape). The arm stays at its
+commanded pose; the loads' second variation is taken at the undeformed state. Exact to first
+order where the loads run along the links or act through pendula (columns, payloads along a
+link, springs holding a weight). Where the loads bend a link across its axis the left-out
+terms are of the same order as the kept ones. On benchmark A's bent arm mode 1's shift is
+within 7 % of a geometrically exact tangent and the higher modes' are off by factors
+(``benchmarks/bench_preload_frame.py``), so :class:`~pinflex.exceptions.PreloadBendingWarning`
+names such links.
 
 A free joint whose coordinate feels a static load is not in equilibrium: there is no static
 state to vibrate about, and :class:`~pinflex.exceptions.PreloadNotInEquilibrium` asks to lock
