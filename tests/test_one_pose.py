@@ -246,25 +246,3 @@ def test_planar_rows_left_out_are_zero_at_every_pose():
         assert np.abs(S[layout.keep]).max() > 0.1 * scale
     for spatial in (FlexibleModel(TWO_LINK), FlexibleModel(UR5)):
         assert one_pose.one_pose_layout(spatial).keep is None
-
-
-def test_one_pose_root_twists_equal_the_general_walk(models):
-    """The one-pose root twists equal :func:`solve.root_twists` on every link they serve.
-
-    Both apply the joints' one rule (``erls.terms.joint_step``); the one-pose walk skips the
-    links no carrier reads and starts from the attachments' constant parts. Revolute,
-    continuous, prismatic and fixed joints, planar and spatial.
-    """
-    for name, model, q in models:
-        terms = kinematics.pose_terms(model, check_q(model, q)[None])
-        plan = solve.solve_plan(model)
-        ref = solve.root_twists(model, plan, terms, 1)
-        got = one_pose.root_twists_one(model, plan, terms)
-        carriers = set(plan.cores) | set(model.plan.inertias)
-        assert carriers <= set(got), name
-        scale = max((np.abs(e).max() for e in ref.values() if e is not None), default=1.0)
-        for link, e in got.items():
-            if e is None:
-                assert ref[link] is None or not np.any(ref[link]), (name, link)
-            else:
-                assert np.abs(e - ref[link]).max() <= 1e-14 * scale, (name, link)
