@@ -401,3 +401,25 @@ class ModelValidityError(PinflexError):
     def __init__(self, message: str, validity=None):
         self.validity = validity
         super().__init__(message)
+
+
+class LinearisationWarning(PinflexWarning):
+    """The torque drive's linearised route is not accurate on this motion.
+
+    Its linearisation error estimate exceeds its threshold
+    (:mod:`pinflex.dynamics.torque_linear`): the motion strays too far from the rigid
+    computed-torque motion; use ``route="nonlinear"``.
+    """
+
+
+class LinearisationError(PinflexError):
+    """``strict``: the torque drive's linearised route is not accurate on this motion.
+
+    Its linearisation error estimate exceeds its threshold
+    (:mod:`pinflex.dynamics.torque_linear`); ``route="nonlinear"`` integrates the nonlinear
+    equations instead.
+    """
+
+    def __init__(self, message: str, estimate: float = float("nan")):
+        self.estimate = estimate
+        super().__init__(message)

@@ -40,6 +40,9 @@ class Simulation:
         validity: The validity indicator of eq. (1) along the motion
             (:class:`~pinflex.erls.validity.Validity`), or None.
         terms: ``"eq1"`` or ``"full"`` (:mod:`pinflex.dynamics.speed`).
+        linearisation_error: The torque drive's linearised route
+            (:mod:`pinflex.dynamics.torque_linear`): estimate of its linearisation error,
+            relative to the largest elastic coordinate; NaN for the other routes.
     """
 
     times_s: np.ndarray
@@ -62,6 +65,7 @@ class Simulation:
     observed_order: float = float("nan")
     validity: Any = None
     terms: str = "eq1"
+    linearisation_error: float = float("nan")
 
 
 def output_times(t0: float, t1: float, sample_hz: float) -> np.ndarray:

@@ -14,7 +14,6 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from pinflex.checks import check_q
 from pinflex.dynamics.damping import Damping, check_damping
@@ -22,6 +21,12 @@ from pinflex.dynamics.integrators import NewmarkRun, newmark
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, check_positive, output_times
 from pinflex.dynamics.terms import ErlsDynamics
+from pinflex.dynamics.torque_linear import (
+    LINEARISATION_THRESHOLD,
+    computed_torque,
+    motor_rows,
+    simulate_torque_linear,
+)
 from pinflex.exceptions import ConfigurationError
 from pinflex.linalg import held_rayleigh
 from pinflex.resources import check_series
@@ -52,6 +57,9 @@ def simulate_torque(
     step_s: float | None = None,
     strict: bool = False,
     validity_threshold: float | None = None,
+    route: str | None = None,
+    steps: int | None = None,
+    linearisation_threshold: float | None = None,
 ) -> Simulation:
     """Forward dynamics of eq. (1) under motor torques (free joints between the motors).
 
@@ -105,6 +113,20 @@ def simulate_torque(
         validity_threshold: Threshold of the indicator (default
             :data:`pinflex.erls.validity.VALIDITY_THRESHOLD`). ``Simulation.validity`` holds
             the indicator of the reference motion, or of the simulated one without it.
+        route: ``"linear"`` (the default with a reference ``trajectory`` and ``kp > 0``):
+            the equations linearised about the rigid computed-torque motion, integrated like
+            the prescribed drive, with the estimate of their linearisation error
+            (``Simulation.linearisation_error``; :mod:`pinflex.dynamics.torque_linear`);
+            ``rtol``, ``atol``, ``atol_q``, ``rho_inf``, ``corrections``,
+            ``coefficient_step_s`` and ``step_s`` belong to the other route.
+            ``"nonlinear"`` (the default otherwise): the nonlinear equations of motion by
+            generalized-α (adaptive or ``step_s``); about 10³ times slower on benchmark A.
+        steps: ``route="linear"``: trapezoidal steps ``N`` of the coarser run over the motion
+            (default ``motion × sample_hz / 2``, at least 8).
+        linearisation_threshold: ``route="linear"``: estimate above which the route warns
+            (:class:`~pinflex.exceptions.LinearisationWarning`; with ``strict`` it refuses,
+            :class:`~pinflex.exceptions.LinearisationError`); default
+            :data:`pinflex.dynamics.torque_linear.LINEARISATION_THRESHOLD`.
     """
     check_positive(duration_s=duration_s, sample_hz=sample_hz, rtol=rtol, atol=atol,
                     atol_q=atol_q)
@@ -142,29 +164,30 @@ def simulate_torque(
         indicator = motion_validity(
             dyn, motion, strict=strict,
             threshold=VALIDITY_THRESHOLD if validity_threshold is None else validity_threshold)
+    if route is None:
+        route = "linear" if motion is not None and kp > 0.0 else "nonlinear"
+    if route not in ("linear", "nonlinear"):
+        raise ConfigurationError(f"route = {route!r} must be 'linear' or 'nonlinear'")
+    if route == "linear":
+        if motion is None:
+            raise ConfigurationError(
+                "route = 'linear' linearises about a reference motion: give trajectory= (and "
+                "no torque function), or use route = 'nonlinear'")
+        if step_s is not None:
+            raise ConfigurationError("step_s belongs to route = 'nonlinear'; the linear route "
+                                     "takes steps=")
+        return simulate_torque_linear(
+            dyn, motion, duration_s=duration_s, kp=kp, kd=kd, damping=damping,
+            sample_hz=sample_hz, z0=z0, zd0=zd0, steps=steps,
+            threshold=(LINEARISATION_THRESHOLD if linearisation_threshold is None
+                       else linearisation_threshold), strict=strict, validity=indicator)
     if not (np.isfinite(coefficient_step_s) and coefficient_step_s >= 0.0):
         raise ConfigurationError(f"coefficient_step_s = {coefficient_step_s!r} must be >= 0")
 
     def joint_rows(q):
-        A = dyn.joint_offsets(q)[0]
-        return np.hstack([-(Cm @ A), Cm])
+        return motor_rows(dyn, q)
 
-    def feedforward(t):
-        qr, qdr, qddr = motion(t)
-        M, Ck, _, F = dyn.linear_terms(qr)
-        Cr = np.tensordot(qdr, Ck, axes=(0, 0))
-        return np.linalg.solve(Cm.T, M[nx:, nx:] @ qddr + Cr[nx:, nx:] @ qdr - F[nx:])
-
-    ff = None
-    if motion is not None:
-        knots = np.asarray(motion.trajectory.times_s, dtype=float)
-        tg = np.unique(np.concatenate([
-            np.linspace(a, b, max(2, int(np.ceil((b - a) / 5e-3 - 1e-9))) + 1)
-            for a, b in zip(knots[:-1], knots[1:])]))
-        ff_spline = CubicSpline(tg, np.array([feedforward(t) for t in tg]), axis=0)
-
-        def ff(t):
-            return ff_spline(min(max(t, tg[0]), tg[-1]))
+    ff = computed_torque(dyn, motion) if motion is not None else None
 
     def applied(t, z, zd, G, terms):
         if torque is not None:
