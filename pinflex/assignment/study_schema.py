@@ -80,9 +80,25 @@ def _simulation_rules(table: dict, report) -> None:
     for key in ("rtol", "atol", "step_s", "kp", "kd"):
         if key in table and table.get("drive", "prescribed") == "prescribed":
             report(key, "belongs to drive = 'torque'")
+    if "route" in table and table.get("drive", "prescribed") == "prescribed":
+        report("route", "belongs to drive = 'torque'")
+    if table.get("drive") == "torque" and _torque_route(table) == "linear":
+        for key in ("rtol", "atol", "step_s"):
+            if key in table:
+                report(key, "belongs to route = 'nonlinear' (the torque drive's default "
+                       "route with kp > 0 is 'linear')")
     if table.get("drive") == "torque" and table.get("terms") == "full":
         report("terms", "'full' is for drive = 'prescribed' (the torque drive integrates "
                "eq. (1))")
+
+
+def _torque_route(table: dict) -> str:
+    """The torque drive's route a ``[simulation]`` table asks for (default: by ``kp``)."""
+    route = table.get("route")
+    if route in ("linear", "nonlinear"):
+        return route
+    kp = table.get("kp", 0.0)
+    return "linear" if _number(kp) and kp > 0.0 else "nonlinear"
 
 
 _MODE = Field("int", required=True, ge=1, le=10_000, doc="non-rigid mode number, 1 = lowest")
@@ -135,6 +151,13 @@ SIMULATION: dict[str, Field] = {
     "step_s": Field(gt=0.0, le=1.0, unit="s", doc="torque drive: fixed step"),
     "kp": Field(ge=0.0, le=1e12, unit="N m/rad", doc="torque drive: PD stiffness"),
     "kd": Field(ge=0.0, le=1e12, unit="N m s/rad", doc="torque drive: PD damping"),
+    "route": Field("choice", choices=("linear", "nonlinear"),
+                   doc="torque drive: 'linear' (default with kp > 0: linearised about the "
+                   "rigid computed-torque motion, with its error estimate) or 'nonlinear' "
+                   "(the nonlinear equations, adaptive generalized-alpha)"),
+    "linearisation_threshold": Field(gt=0.0, le=1.0, doc="torque drive, route 'linear': "
+                                     "linearisation error estimate above which it warns "
+                                     "(default 0.01)"),
     "terms": Field("choice", choices=("eq1", "full"),
                    doc="prescribed drive: 'eq1' (default) or 'full' (centrifugal, Euler and "
                    "geometric-stiffness terms, pinflex.dynamics.speed)"),

@@ -48,6 +48,12 @@ def add_parser(sub) -> None:
     g = p.add_argument_group("simulation settings (override the study's [simulation] keys)")
     g.add_argument("--drive", choices=("prescribed", "torque"), default=None,
                    help="prescribed joint motion (default) or computed torque + PD")
+    g.add_argument("--route", choices=("linear", "nonlinear"), default=None,
+                   help="torque drive: 'linear' (default with kp > 0) linearises about the "
+                   "rigid computed-torque motion and reports its linearisation error estimate "
+                   "(warns above [simulation] linearisation_threshold, 0.01); 'nonlinear' "
+                   "integrates the nonlinear equations (adaptive generalized-alpha, about "
+                   "1000x slower on benchmark A)")
     g.add_argument("--after", type=float, default=None, metavar="S",
                    help="simulated time after the last trajectory sample [s] (default 0.5)")
     g.add_argument("--gravity", type=float, nargs=3, default=None, metavar=("GX", "GY", "GZ"),
@@ -78,7 +84,8 @@ def simulation_overrides(args: argparse.Namespace) -> dict:
     """The ``[simulation]`` keys given on the command line (checked with the study's)."""
     out: dict[str, Any] = {}
     for key, name in (("drive", "drive"), ("after_s", "after"), ("frame", "frame"),
-                      ("sample_hz", "sample_hz"), ("terms", "terms"), ("strict", "strict")):
+                      ("sample_hz", "sample_hz"), ("terms", "terms"), ("strict", "strict"),
+                      ("route", "route")):
         if getattr(args, name, None) is not None:
             out[key] = getattr(args, name)
     for key in ("gravity", "point"):
@@ -260,6 +267,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             "dominant_frequency_hz": d["dominant_frequency_hz"],
             "steps": d["steps"], "time_s": d["time_s"],
             "step_error_estimate": d.get("error_estimate"),
+            "linearisation_error_estimate": d.get("linearisation_error"),
             "residual_joint_condition": d["joint_condition"],
             "residual_reference_hz": d["reference_hz"], "frame": d["frame"],
             "terms": d.get("terms", "eq1"), "validity": d.get("validity"),

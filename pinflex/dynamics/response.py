@@ -50,6 +50,8 @@ class VibrationReport:
         validity: The validity indicator's summary
             (:meth:`pinflex.erls.validity.Validity.summary`), or None.
         terms: ``"eq1"`` or ``"full"``: the terms simulated.
+        linearisation_error: The torque drive's linearised route: its linearisation error
+            estimate (``Simulation.linearisation_error``); NaN otherwise.
     """
 
     name: str
@@ -71,6 +73,7 @@ class VibrationReport:
     error_estimate: float = float("nan")
     validity: dict | None = None
     terms: str = "eq1"
+    linearisation_error: float = float("nan")
 
     def summary(self) -> dict:
         """The JSON-ready metrics (no time series)."""
@@ -84,6 +87,8 @@ class VibrationReport:
                                       else float(self.dominant_frequency_hz))
         d["error_estimate"] = (None if not np.isfinite(self.error_estimate)
                                else float(self.error_estimate))
+        d["linearisation_error"] = (None if not np.isfinite(self.linearisation_error)
+                                    else float(self.linearisation_error))
         return d
 
     def to_json(self, *, series: bool = False) -> str:
@@ -250,6 +255,7 @@ def vibration_report(dyn, sim, *, name: str = "design", frame: str = "tool",
         final_q=tuple(float(v) for v in sim.q[-1]),
         validity=None if getattr(sim, "validity", None) is None else sim.validity.summary(),
         terms=getattr(sim, "terms", "eq1"),
+        linearisation_error=float(getattr(sim, "linearisation_error", float("nan"))),
     )
 
 

@@ -22,6 +22,11 @@ Example (all keys optional; the defaults shown)::
                                 # of step_s and step_s / 2, Richardson-extrapolated
     kp = 0.0                    # torque drive: PD gains on the motor angles [N m/rad]
     kd = 0.0                    #               [N m s/rad]
+    # route = "linear"          # torque drive (default with kp > 0): linearised about the
+                                # rigid computed-torque motion, with its error estimate
+                                # (pinflex.dynamics.torque_linear); "nonlinear": the
+                                # nonlinear equations (rtol, atol, step_s belong to it)
+    # linearisation_threshold = 0.01  # route "linear": warn above this estimate
     terms = "eq1"               # prescribed drive: or "full" (centrifugal, Euler and
                                 # geometric-stiffness terms; pinflex.dynamics.speed)
     strict = false              # refuse a motion too fast for eq. (1) (validity indicator
@@ -69,6 +74,8 @@ class SimulationSettings:
     step_s: float | None = None
     kp: float = 0.0
     kd: float = 0.0
+    route: str | None = None
+    linearisation_threshold: float | None = None
     terms: str = "eq1"
     strict: bool = False
     validity_threshold: float = 0.1
@@ -201,6 +208,8 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
                               atol=settings.atol,
                               rho_inf=0.9 if settings.rho_inf is None else settings.rho_inf,
                               step_s=settings.step_s or None, strict=settings.strict,
-                              validity_threshold=settings.validity_threshold)
+                              validity_threshold=settings.validity_threshold,
+                              route=settings.route,
+                              linearisation_threshold=settings.linearisation_threshold)
     rep = vibration_report(dyn, sim, name=name, frame=settings.frame, xyz=settings.point)
     return rep, sim, dyn
