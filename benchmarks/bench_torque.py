@@ -16,7 +16,10 @@ Printed: process CPU time per simulated second (median and range over the rounds
 load average, the linear route's two estimates (Richardson step error, linearisation error),
 its difference from the nonlinear route on the short horizon and from a converged linear run
 (8x the steps) on the whole run (largest elastic coordinate and tip deflection, relative to
-their peaks).
+their peaks). With ``--peer`` (the ``peers`` extra): the same servo run in Exudyn
+(``peer_exudyn.exudyn_servo_tip_deflection``: ANCF cables, torsional spring-damper motors fed
+the same computed torque) at each ``--peer-steps``, its CPU per simulated second and its tip
+deflection (against the rigid arm at the measured motor angles) against our converged run.
 """
 
 from __future__ import annotations
@@ -53,6 +56,10 @@ def main(argv=None) -> int:
     parser.add_argument("--kp", type=float, default=3000.0)
     parser.add_argument("--kd", type=float, default=30.0)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--peer", action="store_true",
+                        help="also run the PD servo in Exudyn (the peers extra)")
+    parser.add_argument("--peer-steps", type=float, nargs="+", default=[1e-4, 5e-5, 2.5e-5],
+                        metavar="H", help="Exudyn time steps [s] (default 1e-4 5e-5 2.5e-5)")
     args = parser.parse_args(argv)
     model = benchmark_model()
     motion = JointMotion(benchmark_trajectory(model))
@@ -107,6 +114,21 @@ def main(argv=None) -> int:
         "full_joint_deviation_rad": float(np.abs(
             full.q_physical - motion.sample(full.times_s)[0]).max()),
     }
+    out["peer"] = None
+    if args.peer:
+        from peer_exudyn import compare_servo_with_exudyn
+
+        from pinflex.dynamics import vibration_report
+        from pinflex.dynamics.torque_linear import computed_torque
+
+        rep = vibration_report(dyn, ref)
+        out["peer"] = compare_servo_with_exudyn(
+            motion, computed_torque(dyn, motion), rep.times_s, rep.deflection_m[:, :2],
+            kp=args.kp, kd=args.kd, after_s=args.after, steps_s=args.peer_steps)
+        ours = vibration_report(dyn, full)
+        out["linear_full_tip_vs_converged_report"] = float(
+            np.abs(ours.deflection_m - rep.deflection_m).max()
+            / np.abs(rep.deflection_m).max())
     ratio = np.array(cpu["nonlinear_short"]) / np.array(cpu["linear_full"])
     out["speedup_vs_nonlinear"] = {"median": float(np.median(ratio)),
                                    "range": [float(ratio.min()), float(ratio.max())]}
@@ -134,6 +156,15 @@ def main(argv=None) -> int:
           f"{out['full_linearisation_error']:.2e}; tip peak "
           f"{1e3 * out['full_tip_peak_m']:.4f} mm, joint deviation "
           f"{out['full_joint_deviation_rad']:.2e} rad")
+    for p in out["peer"] or []:
+        ch = p["change_from_coarser"]
+        print(f"  peer ({p['model']}): {p['cpu_per_simulated_s']:.3f} CPU-s per simulated s; "
+              f"tip deflection vs our converged run {100 * p['tip_difference']:.3f} % of the "
+              "peak" + ("" if ch is None else f" (change from the coarser step "
+                                              f"{100 * ch:.3f} %)"))
+    if args.peer:
+        print(f"  ours (default steps) vs our converged run, same measure: "
+              f"{100 * out['linear_full_tip_vs_converged_report']:.3f} % of the peak")
     return 0
 
 
