@@ -20,12 +20,13 @@ import time
 import numpy as np
 
 
-def _cable_arm(mbs, angles0, lengths, elements, mass_per_length, EA, EI, tip_masses):
-    """The two links as ANCF cables at the absolute angles ``angles0``; point masses at tips.
+def _cable_arm(angles0, lengths, elements, mass_per_length, EA, EI, tip_masses):
+    """A new system: the two links as ANCF cables at absolute angles, point masses at the tips.
 
-    Returns ``(ground coordinate marker, [nodes of link 1, nodes of link 2])``.
+    ``angles0``: the links' absolute angles (the first two are used). Returns ``(system container, system, ground coordinate marker, [nodes of link 1, nodes of
+    link 2])`` (keep the container alive while the system is used).
     """
-    import exudyn as exu  # noqa: F401 (the item interface needs the module loaded)
+    import exudyn as exu
     from exudyn.itemInterface import (
         MarkerNodeCoordinate,
         MassPoint2D,
@@ -37,12 +38,14 @@ def _cable_arm(mbs, angles0, lengths, elements, mass_per_length, EA, EI, tip_mas
         ObjectGround,
     )
 
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
     mbs.AddObject(ObjectGround())
     ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
     m_ground = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
     start = np.zeros(2)
     link_nodes = []
-    for L, ne, th in zip(lengths, elements, angles0):
+    for L, ne, th in zip(lengths, elements, angles0[:2]):
         d = np.array([np.cos(th), np.sin(th)])
         nodes = [mbs.AddNode(NodePoint2DSlope1(referenceCoordinates=[*(start + L * i / ne * d),
                                                                      *d]))
@@ -62,7 +65,7 @@ def _cable_arm(mbs, angles0, lengths, elements, mass_per_length, EA, EI, tip_mas
                 mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
                     mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[-1], coordinate=c)),
                     mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=p, coordinate=c))]))
-    return m_ground, link_nodes
+    return SC, mbs, m_ground, link_nodes
 
 
 def exudyn_tip_deflection(motion, *, lengths=(0.6, 0.45), elements=(4, 3), mass_per_length=1.9,
@@ -83,10 +86,8 @@ def exudyn_tip_deflection(motion, *, lengths=(0.6, 0.45), elements=(4, 3), mass_
 
     q0 = motion.q_start
     t_end = motion.t1 + after_s
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    m_ground, link_nodes = _cable_arm(mbs, (q0[0], q0[1]), lengths, elements, mass_per_length,
-                                      EA, EI, tip_masses)
+    SC, mbs, m_ground, link_nodes = _cable_arm(q0, lengths, elements, mass_per_length, EA, EI,
+                                               tip_masses)
     angles0 = (q0[0], q0[1])
 
     def theta1(t):
@@ -200,10 +201,8 @@ def exudyn_servo_tip_deflection(motion, feedforward, *, kp, kd, lengths=(0.6, 0.
 
     q0 = motion.q_start
     t_end = motion.t1 + after_s
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    m_ground, link_nodes = _cable_arm(mbs, (q0[0], q0[1]), lengths, elements, mass_per_length,
-                                      EA, EI, tip_masses)
+    SC, mbs, m_ground, link_nodes = _cable_arm(q0, lengths, elements, mass_per_length, EA, EI,
+                                               tip_masses)
     root1, tip1, root2 = link_nodes[0][0], link_nodes[0][-1], link_nodes[1][0]
     for c in (0, 1):  # base position held; elbow: link 2's root at link 1's tip
         mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
