@@ -20,7 +20,7 @@ from pinflex.description import parse
 from pinflex.dynamics import ErlsDynamics
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.torque import simulate_torque
-from pinflex.exceptions import ConfigurationError
+from pinflex.exceptions import ConfigurationError, LinearisationError, LinearisationWarning
 from pinflex.trajectory import Trajectory
 
 #: Kane, Ryan and Banerjee's beam: L = 10 m, EI = 1.4e4 N m², ρA = 1.2 kg/m, on one joint.
@@ -151,3 +151,97 @@ def test_linear_route_refuses_what_it_cannot_linearise(hub_beam):
     with pytest.raises(ConfigurationError, match="route"):
         simulate_torque(hub_beam, q0=[0.4], trajectory=motion, duration_s=0.1, kp=10.0,
                         route="fast")
+
+
+def _benchmark_a(scale=1.0):
+    from pinflex.cases.benchmark_a import benchmark_model, benchmark_trajectory
+
+    model = benchmark_model()
+    full = benchmark_trajectory(model)
+    motion = JointMotion(Trajectory(full.times_s / scale, full.q, full.joint_names))
+    return ErlsDynamics(model), motion
+
+
+def test_a_fast_motion_is_flagged_and_refused_with_strict():
+    """Benchmark A's motion ten times faster: the linearisation estimate says it is invalid.
+
+    The servo (kp 3000 N m/rad) lets the arm stray from the rigid computed-torque motion (the
+    elastic reactions are 100x larger); within 30 ms the estimate exceeds 1e-2 (measured 0.34;
+    against the nonlinear equations see the slow test below), the route warns and, with
+    ``strict``, refuses. The same run at the original speed stays silent.
+    """
+    dyn, motion = _benchmark_a(10.0)
+    with pytest.warns(LinearisationWarning, match="route='nonlinear'"):
+        sim = simulate_torque(dyn, q0=motion.q_start, trajectory=motion, duration_s=0.03,
+                              kp=3000.0, kd=30.0, sample_hz=5000.0)
+    assert sim.linearisation_error > 0.1
+    with pytest.raises(LinearisationError) as err:
+        simulate_torque(dyn, q0=motion.q_start, trajectory=motion, duration_s=0.03,
+                        kp=3000.0, kd=30.0, sample_hz=5000.0, strict=True,
+                        validity_threshold=1.0)  # eq. (1)'s own indicator is 0.118 here
+    assert err.value.estimate == pytest.approx(sim.linearisation_error)
+    dyn, motion = _benchmark_a(1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LinearisationWarning)
+        slow = simulate_torque(dyn, q0=motion.q_start, trajectory=motion, duration_s=0.03,
+                               kp=3000.0, kd=30.0, sample_hz=5000.0)
+    assert slow.linearisation_error < 1e-3
+
+
+def _nonlinear_reference(dyn, motion, duration, kp, kd, times):
+    """The torque drive's nonlinear equations integrated by ``scipy``'s Radau (rtol 1e-8).
+
+    ``M(q) z̈ + C(q, q̇) ż + K z = F + Gᵀ τ + K z₀``, ``τ = τ_ff + k_p (C q_r − G z) + k_d (C q̇_r
+    − G ż)``, ``G = [−C A, C]``, all at the current state: eq. (1)'s terms at each evaluation,
+    no linearisation, an implicit Runge-Kutta integrator of its own.
+    """
+    from scipy.integrate import solve_ivp
+
+    from pinflex.dynamics.torque_linear import computed_torque, motor_rows
+
+    ff = computed_torque(dyn, motion)
+    nx, nd = dyn.nx, dyn.ndof
+    Cm = dyn.model.coord_map
+    z_rest = np.concatenate([np.zeros(nx), motion.q_start])
+
+    def rhs(t, y):
+        z, zd = y[:nd], y[nd:]
+        M, Ck, K, F = dyn.linear_terms(z[nx:])
+        G = motor_rows(dyn, z[nx:])
+        qr, qdr, _ = motion(t)
+        tau = ff(t) + kp * (Cm @ qr - G @ z) + kd * (Cm @ qdr - G @ zd)
+        rest = F + G.T @ tau + K @ z_rest - np.tensordot(zd[nx:], Ck, axes=(0, 0)) @ zd - K @ z
+        return np.concatenate([zd, np.linalg.solve(M, rest)])
+
+    sol = solve_ivp(rhs, (0.0, duration), np.concatenate([z_rest, np.zeros(nd)]),
+                    method="Radau", rtol=1e-8, atol=1e-13, t_eval=times)
+    assert sol.status == 0
+    return sol.y[:nx].T
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scale, duration, steps", [(1.0, 0.05, 500), (10.0, 0.03, None)])
+def test_benchmark_a_servo_against_the_nonlinear_equations(scale, duration, steps):
+    """Benchmark A's PD servo against the nonlinear equations (Radau), at speed and 10x faster.
+
+    At speed (first 50 ms, 4x the default steps) the elastic coordinates agree within the sum
+    of the two estimates (measured 1.5e-5 of the largest; Richardson 1e-5, linearisation
+    1.3e-5). Ten times faster (30 ms) the route warns: its estimate (measured 0.34) is far
+    above the actual difference (2.9e-3), on the safe side. The route takes well under a
+    second; the reference a minute or more.
+    """
+    dyn, motion = _benchmark_a(scale)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim = simulate_torque(dyn, q0=motion.q_start, trajectory=motion, duration_s=duration,
+                              kp=3000.0, kd=30.0, sample_hz=5000.0, steps=steps)
+    flagged = any(issubclass(w.category, LinearisationWarning) for w in caught)
+    ref = _nonlinear_reference(dyn, motion, duration, 3000.0, 30.0, sim.times_s)
+    err = float(np.abs(sim.x - ref).max() / np.abs(ref).max())
+    assert err <= sim.error_estimate + sim.linearisation_error
+    if scale == 1.0:
+        assert not flagged
+        assert err < 5e-5
+    else:
+        assert flagged and sim.linearisation_error > 1e-2
+        assert err < 1e-2
