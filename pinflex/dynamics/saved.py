@@ -141,7 +141,7 @@ def report_from_json(text: str) -> VibrationReport:
             v = np.asarray(v, dtype=float).reshape(-1, 3)
         elif f.name in ("reference_hz", "final_q"):
             v = tuple(float(a) for a in v)
-        elif f.name in ("dominant_frequency_hz", "error_estimate"):
+        elif f.name in ("dominant_frequency_hz", "error_estimate", "linearisation_error"):
             v = float("nan") if v is None else float(v)
         kw[f.name] = v
     return VibrationReport(**kw)
