@@ -199,6 +199,14 @@ class UnsolvedLoadWarning(PinflexWarning):
     """
 
 
+class OptimumNotConfirmedWarning(PinflexWarning):
+    """A global PRBDM fit's best value was reached by only one of its polished starts.
+
+    Another sample of starts may find a lower optimum; the fit reports how many starts
+    reached its best (``starts_at_best``).
+    """
+
+
 class InvalidBeam(InvalidBeamProperty):
     """A PRBDM beam planform is malformed (vertices, widths, thickness or material)."""
 

@@ -244,10 +244,8 @@ def _print_paper(fit) -> None:
     print("  per mode, the largest |f/f_truth - 1| over those poses, in %: "
           + ", ".join(f"{100.0 * v:.3g}" for v in fit.mode_errors)
           + "  (the loss can be small while a mode is far off)")
-    best = fit.start_values[0] if fit.start_values else float("nan")
-    near = sum(v <= best * 1.001 for v in fit.start_values)
     print(f"  global search: {fit.n_samples} samples, {len(fit.start_values)} polished starts, "
-          f"{near} within 0.1 % of the best")
+          f"{fit.starts_at_best} within 0.1 % of the best")
     if fit.load_n:
         print("  deflection case: tip force " + ", ".join(f"({f[0]:g}, {f[1]:.6g}) N"
                                                        for f in fit.load_n))

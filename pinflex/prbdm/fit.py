@@ -68,6 +68,9 @@ class PrbdmFit:
         start_values: The objective reached from every polished start, ascending [-]
             (paper definitions): how stable the optimum is.
         n_samples: Designs of the global sample (paper definitions).
+        starts_at_best: Polished starts whose value is within 0.1 % of the best (paper
+            definitions): 1 means the optimum was found once and another sample may find a
+            lower one (the fit then warns, ``OptimumNotConfirmedWarning``).
         load_n: Tip forces of the paper definitions' deflection loss, (l, 2) [N].
         load_labels: Names of the load cases of ``load_errors`` when the fit was given load
             cases (:mod:`pinflex.prbdm.loads`), e.g. ``"b=1"``, ``"guided a=10 @90"``; empty
@@ -112,6 +115,7 @@ class PrbdmFit:
     mode_errors: tuple[float, ...] = ()
     start_values: tuple[float, ...] = ()
     n_samples: int = 0
+    starts_at_best: int = 0
     load_n: tuple[tuple[float, float], ...] = ()
     load_labels: tuple[str, ...] = ()
 

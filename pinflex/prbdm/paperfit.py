@@ -154,7 +154,7 @@ def fit_by_definitions(planform: Planform, n_joints: int, n_modes: int | None = 
                    definitions=defs.name, losses=paper_losses_of(problem, posed),
                    mode_errors=tuple(float(v) for v in np.abs(posed.mode_errors).max(0)),
                    start_values=tuple(float(v) for v in posed.start_values),
-                   n_samples=posed.n_samples,
+                   n_samples=posed.n_samples, starts_at_best=posed.starts_at_best,
                    load_n=tuple((float(f[0]), float(f[1])) for f in problem.forces_n))
     return _as_paper_fit(fit, problem, posed)
 

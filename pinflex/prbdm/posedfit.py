@@ -26,6 +26,7 @@ result.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -33,7 +34,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize
 
-from ..exceptions import InvalidChain, MappingFailed
+from ..exceptions import InvalidChain, MappingFailed, OptimumNotConfirmedWarning
 from ..progress import ProgressBar
 from .perpose import (
     PosedProblem,
@@ -248,10 +249,23 @@ class PosedFit:
         """Number of polished starts."""
         return int(self.start_values.size)
 
+    @property
+    def starts_at_best(self) -> int:
+        """Polished starts within :data:`SAME_OPTIMUM` of the best: 1 means found once."""
+        return self.within(SAME_OPTIMUM)
+
     def within(self, fraction: float) -> int:
         """Number of starts whose value is within ``fraction`` (relative) of the best."""
         best = self.start_values[0]
         return int(np.count_nonzero(self.start_values <= best * (1.0 + fraction)))
+
+
+def _confirmed(results: list[tuple[float, np.ndarray]]) -> bool:
+    """True when at least CONFIRMATIONS polished values are within SAME_OPTIMUM of the best."""
+    if not results:
+        return False
+    best = min(r[0] for r in results)
+    return sum(r[0] <= best * (1.0 + SAME_OPTIMUM) for r in results) >= CONFIRMATIONS
 
 
 def cube_to_fractions(u: np.ndarray) -> np.ndarray:
@@ -276,10 +290,35 @@ def cube_to_fractions(u: np.ndarray) -> np.ndarray:
     return MIN_FRACTION + free * out
 
 
-def feasible_sample(n_joints: int, count: int, seed: int) -> np.ndarray:
-    """Uniform sample of the feasible fractions: the simplex with every fraction >= 0.02."""
+#: Share of the global sample drawn on the faces of the feasible set (one link at 0.02).
+FACE_SHARE = 0.25
+
+
+def feasible_sample(n_joints: int, count: int, seed: int, face_share: float = 0.0
+                    ) -> np.ndarray:
+    """Sample of the feasible fractions: the simplex with every fraction >= 0.02.
+
+    ``1 - face_share`` of the designs are uniform over the set; the rest are uniform over
+    its faces, one fraction at its bound 0.02 (the faces taken in turn). The combined
+    optimum often lies on a face (a link at its 0.02 minimum: random beam 0's 4R, beam 1's
+    3R), in a narrow basin that a uniform sample of the set rarely enters.
+    """
     rng = np.random.default_rng(seed)
-    return cube_to_fractions(rng.uniform(size=(count, n_joints)))
+    n = int(n_joints)
+    on_faces = int(round(count * face_share)) if n >= 2 else 0
+    inside = cube_to_fractions(rng.uniform(size=(count - on_faces, n)))
+    if on_faces == 0:
+        return inside
+    # n fractions >= 0.02 summing to 1 - 0.02, with 0.02 inserted at the face's index.
+    rest = cube_to_fractions(rng.uniform(size=(on_faces, n - 1)))
+    rest = MIN_FRACTION + (rest - MIN_FRACTION) * (1.0 - MIN_FRACTION * (n + 1)) \
+        / (1.0 - MIN_FRACTION * n)
+    face = np.arange(on_faces) % (n + 1)
+    faces = np.empty((on_faces, n + 1))
+    for j in range(n + 1):
+        rows = face == j
+        faces[rows] = np.insert(rest[rows], j, MIN_FRACTION, axis=1)
+    return np.concatenate([inside, faces])
 
 
 def objective_values(problem: PosedProblem, gammas: np.ndarray, objective: str) -> np.ndarray:
@@ -313,17 +352,45 @@ def project_fractions(points: np.ndarray) -> np.ndarray:
 OUTSIDE_PENALTY = 1e3
 
 
+def fixed_factor_values(problem: PosedProblem, gammas: np.ndarray, factors: np.ndarray,
+                        objective: str) -> np.ndarray:
+    """The objective of designs (S, n + 1) at given factors per pose (S, m), (S,).
+
+    At a design's best factors this is its objective; since those factors are stationary,
+    the design gradient of the objective is the gradient of this function at fixed factors
+    (the envelope theorem), which is smooth where the factor search is only accurate to
+    its interpolation.
+    """
+    gammas = np.atleast_2d(np.asarray(gammas, dtype=float))
+    factors = np.asarray(factors, dtype=float).reshape(gammas.shape[0], -1)
+    combine = problem.definitions.combine
+    _, _, v = eigen_terms(problem, gammas)
+    freq = combine(pose_errors(problem, v, factors))
+    if objective == "eigen":
+        return freq
+    defl = combine(deflection_errors(problem, gammas, factors))
+    return defl if objective == "deflection" else np.hypot(freq, defl)
+
+
 def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: float,
             counter: list[int]) -> tuple[float, np.ndarray]:
     """SLSQP on the first n fractions (the last one closes the simplex) from gamma0.
 
-    Each gradient is a forward difference, its n + 1 designs evaluated in one batch. SLSQP
-    may step outside the feasible set (its line search and the difference steps at a bound):
-    there a design is evaluated at its projection onto the set, plus a penalty on the
-    squared distance, so no link gets a length at or below zero (which has no mass matrix).
+    Eigen-only, the objective is a closed form of the fractions and its gradient a forward
+    difference, its n + 1 designs evaluated in one batch. With deflection, the objective's
+    best factors come from an interpolated search whose value is accurate to about 1e-5
+    relative but not differentiable at the scale of a difference step (a step of 1e-6 gave
+    slopes of either sign); the gradient is then the central difference of the objective
+    at the design's own best factors held fixed (:func:`fixed_factor_values`, exact
+    statics), which is the objective's gradient because the factors are stationary.
+    SLSQP may step outside the feasible set (its line search and the difference steps at a
+    bound): there a design is evaluated at its projection onto the set, plus a penalty on
+    the squared distance, so no link gets a length at or below zero (which has no mass
+    matrix).
     """
     n = problem.n_joints
-    step = 1e-7 if objective == "eigen" else 1e-6
+    eigen = objective == "eigen"
+    step = 1e-7
 
     def designs(points: np.ndarray) -> np.ndarray:
         return np.column_stack([points, 1.0 - points.sum(1)])
@@ -333,14 +400,28 @@ def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: floa
     def value_and_grad(z: np.ndarray) -> tuple[float, np.ndarray]:
         key = z.tobytes()
         if key not in cache:
-            points = np.repeat(z[None], n + 1, axis=0)
-            points[1:] += step * np.eye(n)
-            inside = project_fractions(points)
-            values = objective_values(problem, designs(inside), objective) \
-                + OUTSIDE_PENALTY * np.sum((points - inside) ** 2, axis=1)
-            counter[0] += n + 1
+            if eigen:
+                points = np.repeat(z[None], n + 1, axis=0)
+                points[1:] += step * np.eye(n)
+                inside = project_fractions(points)
+                values = objective_values(problem, designs(inside), objective) \
+                    + OUTSIDE_PENALTY * np.sum((points - inside) ** 2, axis=1)
+                counter[0] += n + 1
+                value, grad = float(values[0]), (values[1:] - values[0]) / step
+            else:
+                inside = project_fractions(z[None])[0]
+                best = best_factors(problem, designs(inside[None]), objective)
+                # Central differences at fixed factors; the steps (1e-7) may leave the
+                # feasible set by that much, which every link length survives.
+                points = inside[None] + step * np.concatenate([np.eye(n), -np.eye(n)])
+                around = fixed_factor_values(problem, designs(points),
+                                             np.repeat(best.factors, 2 * n, axis=0), objective)
+                counter[0] += 1 + 2 * n
+                outside = z - inside
+                value = float(best.value[0]) + OUTSIDE_PENALTY * float(outside @ outside)
+                grad = (around[:n] - around[n:]) / (2.0 * step) + 2.0 * OUTSIDE_PENALTY * outside
             cache.clear()
-            cache[key] = (float(values[0]), (values[1:] - values[0]) / step)
+            cache[key] = (value, grad)
         return cache[key]
 
     cons = [{"type": "ineq", "fun": lambda z: 1.0 - z.sum() - MIN_FRACTION,
@@ -360,30 +441,45 @@ def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: floa
 
 #: Global sample and polished starts of the eigen-only and the deflection objectives.
 EIGEN_SAMPLES, EIGEN_STARTS = 65536, 48
-DEFLECTION_SAMPLES, DEFLECTION_STARTS = 1024, 8
+DEFLECTION_SAMPLES, DEFLECTION_STARTS = 4096, 16
+#: Starts polished at most by default when the best value is not yet confirmed.
+EIGEN_MAX_STARTS, DEFLECTION_MAX_STARTS = 96, 48
+#: Polished values within this relative distance of the best count as the same optimum.
+SAME_OPTIMUM = 1e-3
+#: Polished starts that must reach the best value for the optimum to count as confirmed.
+CONFIRMATIONS = 2
 
 
 def fit_posed(problem: PosedProblem, objective: str = "eigen", n_samples: int | None = None,
               n_starts: int | None = None, seed: int = 0, progress: bool = False,
-              tol: float = 1e-12) -> PosedFit:
+              tol: float | None = None, max_starts: int | None = None) -> PosedFit:
     """Global search over the link fractions, the factors solved per pose.
 
     A uniform sample of the feasible fractions is evaluated in batches; the best samples
     that lie more than 0.02 (in every fraction) from a better chosen one are polished by
-    SLSQP, and the best polished design is the fit. Every start's polished value is kept
-    (:attr:`PosedFit.start_values`), so the stability of the optimum is part of the result.
-    The landscape has many narrow basins (the eigen-only loss of a 5R chain on a random
-    beam has a dozen local optima within a factor of four of the best), so the sample is
-    large: its cost is a batched eigenvalue problem per design.
+    SLSQP, in the order of their sampled values. After ``n_starts`` polishes the search
+    stops if the best value has been reached by :data:`CONFIRMATIONS` starts (within
+    :data:`SAME_OPTIMUM`, relative); otherwise it polishes further samples, one at a time,
+    until it is or ``max_starts`` have been polished, and then warns
+    (:class:`~pinflex.exceptions.OptimumNotConfirmedWarning`). The best polished design is
+    the fit. Every start's polished value is kept (:attr:`PosedFit.start_values`,
+    :attr:`PosedFit.starts_at_best`), so the stability of the optimum is part of the result.
+    The landscape has a few to a dozen narrow basins whose best samples score alike, so
+    which basin a start falls into is close to a draw; the sample's cost is a batched
+    eigenvalue problem (and, with deflection, batched statics) per design.
 
     Args:
         problem: The fit.
         objective: ``"eigen"``, ``"deflection"`` or ``"combined"`` (eq. 27).
-        n_samples: Sample size; default 65,536 for eigen-only and 1,024 with deflection.
-        n_starts: Polished starts; default 48 for eigen-only and 8 with deflection.
+        n_samples: Sample size; default 65,536 for eigen-only and 4,096 with deflection.
+        n_starts: Starts polished at least; default 48 for eigen-only and 16 with deflection.
         seed: Seed of the sample.
         progress: Show a progress bar on stderr.
-        tol: Function tolerance of the polish.
+        tol: Function tolerance of the polish (default 1e-12 eigen-only, 1e-10 with
+            deflection, whose value is accurate to about 1e-5 relative).
+        max_starts: Starts polished at most while the best is unconfirmed; default 96
+            eigen-only and 48 with deflection when ``n_starts`` is defaulted, else
+            ``n_starts`` (no extension).
 
     Raises:
         InvalidChain: For an unknown objective or missing loads.
@@ -398,10 +494,15 @@ def fit_posed(problem: PosedProblem, objective: str = "eigen", n_samples: int | 
                 else EIGEN_SAMPLES if eigen else DEFLECTION_SAMPLES)
     starts = int(n_starts if n_starts is not None else EIGEN_STARTS if eigen
                  else DEFLECTION_STARTS)
-    if count < 1 or starts < 1:
-        raise InvalidChain(f"n_samples = {count} and n_starts = {starts} must be positive")
+    most = int(max_starts if max_starts is not None else starts if n_starts is not None
+               else EIGEN_MAX_STARTS if eigen else DEFLECTION_MAX_STARTS)
+    if count < 1 or starts < 1 or most < starts:
+        raise InvalidChain(f"n_samples = {count} and n_starts = {starts} must be positive, "
+                           f"max_starts = {most} at least n_starts")
+    if tol is None:
+        tol = 1e-12 if eigen else 1e-10
     n = problem.n_joints
-    sample = feasible_sample(n, count, seed)
+    sample = feasible_sample(n, count, seed, FACE_SHARE)
     chunk = 1024 if eigen else 64
     pieces = np.array_split(sample, max(1, -(-count // chunk)))
     bar = ProgressBar(len(pieces) + starts, f"{n}R {objective}", progress)
@@ -410,21 +511,31 @@ def fit_posed(problem: PosedProblem, objective: str = "eigen", n_samples: int | 
         values.append(objective_values(problem, piece, objective))
         bar.update(best=float(np.nanmin(values[-1])))
     value_all = np.concatenate(values)
-    chosen: list[np.ndarray] = []
-    for i in np.argsort(np.where(np.isfinite(value_all), value_all, np.inf)):
-        if not np.isfinite(value_all[i]) or len(chosen) == starts:
-            break
-        if all(np.max(np.abs(sample[i] - c)) > 0.02 for c in chosen):
-            chosen.append(sample[i])
     counter = [count]
     results: list[tuple[float, np.ndarray]] = []
-    for gamma0 in chosen:
-        value, gamma = _polish(problem, objective, gamma0, tol, counter)
+    chosen: list[np.ndarray] = []
+    for i in np.argsort(np.where(np.isfinite(value_all), value_all, np.inf)):
+        if not np.isfinite(value_all[i]) or len(chosen) == most:
+            break
+        if len(chosen) >= starts and _confirmed(results):
+            break
+        if any(np.max(np.abs(sample[i] - c)) <= 0.02 for c in chosen):
+            continue
+        chosen.append(sample[i])
+        value, gamma = _polish(problem, objective, sample[i], tol, counter)
         if np.isfinite(value):
             results.append((value, gamma))
+        if len(chosen) > starts:
+            bar.total += 1
         bar.update(best=min((r[0] for r in results), default=np.inf))
     if not results:
         raise MappingFailed(f"no start of the {objective} fit of {n}R gave a finite loss")
+    if not _confirmed(results):
+        warnings.warn(
+            f"{n}R {objective} fit: the best value {min(r[0] for r in results):.6g} was "
+            f"reached by one of {len(results)} polished starts (fewer than {CONFIRMATIONS} "
+            f"within {SAME_OPTIMUM:g}); another sample may find a lower optimum: raise "
+            "n_samples or max_starts", OptimumNotConfirmedWarning, stacklevel=2)
     results.sort(key=lambda r: r[0])
     gamma = results[0][1]
     best = best_factors(problem, gamma[None], objective)
