@@ -90,9 +90,9 @@ class _Curves:
                     GRID - 1.0)
         j = np.minimum(t.astype(int), GRID - 2)
         x = t - j
-        take = np.take_along_axis
-        y0, y1 = take(self.y, j, 1), take(self.y, j + 1, 1)
-        m0, m1 = take(self.dy, j, 1), take(self.dy, j + 1, 1)
+        rows = np.arange(shape[0])[:, None]
+        y0, y1 = self.y[rows, j], self.y[rows, j + 1]
+        m0, m1 = self.dy[rows, j], self.dy[rows, j + 1]
         x2, x3 = x * x, x * x * x
         value = (2 * x3 - 3 * x2 + 1) * y0 + (x3 - 2 * x2 + x) * m0 \
             + (-2 * x3 + 3 * x2) * y1 + (x3 - x2) * m1
