@@ -18,10 +18,13 @@ cubic Hermite pieces with spline slopes. The reported losses are recomputed with
 statics at the factors found; since the factors are stationary, an interpolation error
 enters the value only to second order.
 
-The fractions are searched globally (:func:`fit_posed`): a uniform sample of the feasible
-simplex (eq. 15b-d) evaluated in batches, and SLSQP polishes of its best distinct samples.
-Every polished value is kept, so the stability of the optimum over starts is part of the
-result.
+The fractions are searched globally (:func:`fit_posed`): a sample of the feasible simplex
+(eq. 15b-d; with deflection a quarter on its faces) evaluated in batches, and SLSQP polishes
+of its best distinct samples until two of them agree on the best value. With deflection the
+polish's gradient is taken at the design's best factors held fixed (the envelope theorem):
+the interpolated factor search is accurate in value but not differentiable at a difference
+step. Every polished value is kept, so the stability of the optimum over starts is part of
+the result.
 """
 
 from __future__ import annotations
@@ -290,7 +293,8 @@ def cube_to_fractions(u: np.ndarray) -> np.ndarray:
     return MIN_FRACTION + free * out
 
 
-#: Share of the global sample drawn on the faces of the feasible set (one link at 0.02).
+#: Share of the global sample with deflection drawn on the faces of the feasible set (one
+#: link at 0.02); the eigen-only sample stays uniform over the set.
 FACE_SHARE = 0.25
 
 
@@ -443,7 +447,7 @@ def _polish(problem: PosedProblem, objective: str, gamma0: np.ndarray, tol: floa
 EIGEN_SAMPLES, EIGEN_STARTS = 65536, 48
 DEFLECTION_SAMPLES, DEFLECTION_STARTS = 4096, 16
 #: Starts polished at most by default when the best value is not yet confirmed.
-EIGEN_MAX_STARTS, DEFLECTION_MAX_STARTS = 96, 48
+EIGEN_MAX_STARTS, DEFLECTION_MAX_STARTS = 48, 48
 #: Polished values within this relative distance of the best count as the same optimum.
 SAME_OPTIMUM = 1e-3
 #: Polished starts that must reach the best value for the optimum to count as confirmed.
@@ -455,12 +459,13 @@ def fit_posed(problem: PosedProblem, objective: str = "eigen", n_samples: int | 
               tol: float | None = None, max_starts: int | None = None) -> PosedFit:
     """Global search over the link fractions, the factors solved per pose.
 
-    A uniform sample of the feasible fractions is evaluated in batches; the best samples
+    A sample of the feasible fractions is evaluated in batches (uniform eigen-only; with
+    deflection a quarter of it on the set's faces, :func:`feasible_sample`); the best samples
     that lie more than 0.02 (in every fraction) from a better chosen one are polished by
     SLSQP, in the order of their sampled values. After ``n_starts`` polishes the search
     stops if the best value has been reached by :data:`CONFIRMATIONS` starts (within
     :data:`SAME_OPTIMUM`, relative); otherwise it polishes further samples, one at a time,
-    until it is or ``max_starts`` have been polished, and then warns
+    until it is or ``max_starts`` have been polished; if it is not, it warns
     (:class:`~pinflex.exceptions.OptimumNotConfirmedWarning`). The best polished design is
     the fit. Every start's polished value is kept (:attr:`PosedFit.start_values`,
     :attr:`PosedFit.starts_at_best`), so the stability of the optimum is part of the result.
@@ -477,8 +482,8 @@ def fit_posed(problem: PosedProblem, objective: str = "eigen", n_samples: int | 
         progress: Show a progress bar on stderr.
         tol: Function tolerance of the polish (default 1e-12 eigen-only, 1e-10 with
             deflection, whose value is accurate to about 1e-5 relative).
-        max_starts: Starts polished at most while the best is unconfirmed; default 96
-            eigen-only and 48 with deflection when ``n_starts`` is defaulted, else
+        max_starts: Starts polished at most while the best is unconfirmed; default 48
+            (eigen-only: no extension of its 48) when ``n_starts`` is defaulted, else
             ``n_starts`` (no extension).
 
     Raises:
@@ -502,7 +507,7 @@ def fit_posed(problem: PosedProblem, objective: str = "eigen", n_samples: int | 
     if tol is None:
         tol = 1e-12 if eigen else 1e-10
     n = problem.n_joints
-    sample = feasible_sample(n, count, seed, FACE_SHARE)
+    sample = feasible_sample(n, count, seed, 0.0 if eigen else FACE_SHARE)
     chunk = 1024 if eigen else 64
     pieces = np.array_split(sample, max(1, -(-count // chunk)))
     bar = ProgressBar(len(pieces) + starts, f"{n}R {objective}", progress)
