@@ -72,6 +72,11 @@ def run(beams, todo, sample_seeds, n_samples=None, n_starts=None) -> dict:
                              "start_values": list(fit.start_values),
                              "n_samples": fit.n_samples,
                              "link_fractions": list(fit.link_fractions)})
+                r = runs[-1]
+                print(f"     sample seed {s}: {100 * min(r['start_values']):.5f} %, "
+                      f"{fit.starts_at_best} of {len(r['start_values'])} starts at its best, "
+                      f"{'unconfirmed, ' if r['unconfirmed'] else ''}CPU {r['cpu_s']:.0f} s",
+                      flush=True)
             key = "combined" if objective == "combined" else "frequency"
             bests = np.array([r["losses"][key] for r in runs])
             best = float(bests.min())

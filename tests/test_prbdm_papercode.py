@@ -248,7 +248,7 @@ def test_combined_fit_reaches_an_independent_differential_evolution(seed):
 
     de = differential_evolution(lambda z: reference(z.T), [(0.02, 0.94)] * 3, popsize=20,
                                 maxiter=100, tol=1e-8, seed=0, polish=False,
-                                vectorized=True)
+                                vectorized=True, updating="deferred")
     nm = minimize(lambda z: float(reference(z)[0]), de.x, method="Nelder-Mead",
                   options={"xatol": 1e-7, "fatol": 1e-9, "maxiter": 300})
     target = min(de.fun, nm.fun)
