@@ -73,7 +73,9 @@ def run(beams, todo, sample_seeds, n_samples=None, n_starts=None) -> dict:
                              "n_samples": fit.n_samples,
                              "link_fractions": list(fit.link_fractions)})
                 r = runs[-1]
-                print(f"     sample seed {s}: {100 * min(r['start_values']):.5f} %, "
+                parts = ", ".join(f"{k} {100 * v:.4g}" for k, v in fit.losses.items())
+                print(f"     sample seed {s}: {100 * min(r['start_values']):.5f} % ({parts} %; "
+                      f"mode 1 up to {100 * fit.mode_errors[0]:.0f} %), "
                       f"{fit.starts_at_best} of {len(r['start_values'])} starts at its best, "
                       f"{'unconfirmed, ' if r['unconfirmed'] else ''}CPU {r['cpu_s']:.0f} s",
                       flush=True)

@@ -65,11 +65,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              "its beam)")
     parser.add_argument("--samples", type=int, default=None,
                         help="global sample size of the paper's definitions' search (default "
-                             "65536 eigen-only, 1024 with deflection)")
+                             "65536 eigen-only, 4096 with deflection)")
     parser.add_argument("--starts", type=int, default=None,
                         help="multistart points per search (default 8); with --definitions "
                              "paper-*, the polished starts of the global search (default 48 "
-                             "eigen-only, 8 with deflection)")
+                             "eigen-only; 16 with deflection, extended up to 48 until two "
+                             "agree on the best)")
     parser.add_argument("--tol", type=float, default=None, metavar="TOL",
                         help="pick the fewest joints (from --modes, default 1, up to --links) "
                              "whose estimated combined error against the converged beam truth "

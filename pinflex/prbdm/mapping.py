@@ -335,7 +335,9 @@ def fit_prbdm(planform: Planform, n_joints: int, n_modes: int | None = None,
             or ``"paper"`` (eq. 14, per-pose factors).
         poses: Comparison poses for frequencies, see :func:`~pinflex.prbdm.problem.build_problem`.
         n_starts: Multistart points per search (default 16); with the paper's definitions,
-            the polished starts of the global search (default 48 eigen-only, 8 otherwise).
+            the polished starts of the global search (default 48 eigen-only; 16 otherwise,
+            extended up to 48 until two agree on the best, else
+            :class:`~pinflex.exceptions.OptimumNotConfirmedWarning`).
         seed: Seed of the start points.
         truth: Precomputed truth (:func:`~pinflex.prbdm.problem.compute_truth`).
         pareto_points: Interior weights of the Pareto sweep.

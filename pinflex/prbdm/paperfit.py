@@ -132,6 +132,10 @@ def fit_by_definitions(planform: Planform, n_joints: int, n_modes: int | None = 
     Raises:
         InvalidChain: For unknown definitions, objectives or sizes.
         MappingFailed: If no start succeeds.
+
+    Warns:
+        OptimumNotConfirmedWarning: If the best value was reached by one polished start
+            only (the fit's ``starts_at_best`` is then 1).
     """
     defs = definitions_named(definitions)
     if objective not in PER_POSE_OBJECTIVES or (defs.name == "paper-text"
