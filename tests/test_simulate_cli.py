@@ -190,3 +190,34 @@ def test_a_fast_motion_is_warned_about_and_strict_refuses_it(tmp_path, capsys):
     assert v["indicator"] == max(v["max_speed_ratio"], v["max_accel_ratio"])
     assert main(args + ["--strict"]) == 2
     assert "fast for eq. (1)" in capsys.readouterr().err
+
+
+def test_a_simulation_reports_its_progress_and_the_numbers_do_not_change(tmp_path, capsys):
+    """The prescribed drive calls progress(done, total) once per grid coefficient and stage.
+
+    The 11 samples over 0.05 s give 10 intervals of 5 ms, each interpolated at 2 sub-intervals
+    (the drive's grid of at most 5 ms, at least 2 per interval): 21 grid points, plus the
+    validity indicator, the integration and the torques. The bar changes no number.
+    """
+    from pinflex.cli.simulate import run_study
+    from pinflex.description.builtin import builtin_path
+    from pinflex.dynamics.prescribed import simulate_prescribed
+    from pinflex.dynamics.terms import ErlsDynamics
+    from pinflex.erls import FlexibleModel
+    from pinflex.trajectory import Trajectory
+
+    csv = _csv(tmp_path / "move.csv", lambda h: (Q[0] + 0.2 * h, Q[1] + 0.2 * h))
+    model = FlexibleModel(builtin_path("two_link.urdf"), planar=True)
+    traj = Trajectory.from_csv(csv, joint_names=model.joint_names)
+    calls: list[tuple[int, int]] = []
+    dyn = ErlsDynamics(model)
+    with_bar = simulate_prescribed(dyn, traj, after_s=0.02, sample_hz=2000.0,
+                                   progress=lambda d, n: calls.append((d, n)))
+    plain = simulate_prescribed(dyn, traj, after_s=0.02, sample_hz=2000.0)
+    assert [d for d, _ in calls] == list(range(1, 25))
+    assert {n for _, n in calls} == {24}
+    assert np.array_equal(with_bar.x, plain.x) and np.array_equal(with_bar.torques, plain.torques)
+    run_study("builtin:two_link.urdf", trajectory=str(csv), planar=True,
+              simulation={"after_s": 0.02, "sample_hz": 2000.0}, progress=True)
+    err = capsys.readouterr().err
+    assert "simulate design" in err and "24/24" in err

@@ -115,6 +115,25 @@ def _is_study(path: str) -> bool:
     return str(path).lower().endswith(".toml")
 
 
+class DesignProgress:
+    """``progress(done, total)`` of one simulation drawn as a bar (made on the first call)."""
+
+    def __init__(self, label: str, enabled: bool):
+        self.label, self.enabled = label, enabled
+        self.bar: ProgressBar | None = None
+
+    def __call__(self, done: int, total: int) -> None:
+        """Advance the bar to ``done`` of ``total``."""
+        if self.bar is None:
+            self.bar = ProgressBar(total, self.label, self.enabled)
+        self.bar.update(done - self.bar.done)
+
+    def close(self) -> None:
+        """Draw the final state, if the bar was ever drawn."""
+        if self.bar is not None:
+            self.bar.close()
+
+
 def run_study(path, joints: str | None = None, values: dict[str, float] | None = None,
               tol: float | None = None, *, trajectory: str | None = None,
               planar: bool = False, simulation: dict | None = None, progress: bool = False,
@@ -133,8 +152,9 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
         trajectory: Trajectory CSV (required with a robot file; replaces a study's).
         planar: With a robot file: in-plane elastic dofs only.
         simulation: ``[simulation]`` keys overriding the study's (checked with them).
-        progress: Show a progress bar on stderr over the stages (the assignment, then each
-            simulation).
+        progress: Show progress bars on stderr: one over the stages (the assignment, then
+            each simulation) and one inside each prescribed-drive simulation (its
+            coefficient grid, integration and torques).
 
     Returns:
         :class:`StudyRun` ``(reports, [(simulation, dynamics)], settings, assignment result or
@@ -184,7 +204,9 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
         designs = [("design", None)]
     reports, sims = [], []
     for name, y in designs:
-        rep, sim, dyn = simulate_design(model, traj, y, settings, name)
+        inner = DesignProgress(f"simulate {name}", progress)
+        rep, sim, dyn = simulate_design(model, traj, y, settings, name, progress=inner)
+        inner.close()
         reports.append(rep)
         sims.append((sim, dyn))
         bar.update()
@@ -196,8 +218,10 @@ def run_study(path, joints: str | None = None, values: dict[str, float] | None =
 
 
 def write_charts(reports, sims, out) -> list[str]:
-    """The charts of a run into folder ``out``: ``tip_deflection.png`` and, when the runs have
-    a validity indicator, ``validity.png``; returns the files written."""
+    """The charts of a run into folder ``out``; returns the files written.
+
+    ``tip_deflection.png`` and, when the runs have a validity indicator, ``validity.png``.
+    """
     from pathlib import Path
 
     from pinflex.dynamics.charts import deflection_chart, validity_chart

@@ -38,6 +38,7 @@ Integrators of the prescribed motion:
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -338,6 +339,7 @@ def simulate_prescribed(
     terms: str = "eq1",
     strict: bool = False,
     validity_threshold: float = VALIDITY_THRESHOLD,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Simulation:
     """Kineto-elastodynamics: the joints follow ``trajectory``, the elastic coordinates respond.
 
@@ -388,6 +390,11 @@ def simulate_prescribed(
             with ``terms="eq1"``; otherwise such a motion is warned about
             (:class:`~pinflex.exceptions.ModelValidityWarning`).
         validity_threshold: Threshold of the indicator (:mod:`pinflex.erls.validity`).
+        progress: Called as ``progress(done, total)`` as the work advances: once after the
+            validity indicator, once per coefficient on the interpolation grid (the
+            dynamics' matrices, usually the larger part of the cost), once after the
+            integration and once after the motor torques; ``total`` is the grid's size
+            plus three (three alone with ``exact``).
 
     The hold phase after the stop is a constant-coefficient system, propagated exactly by its
     modes at the output rate (:func:`.modal_hold`); its ``steps`` are the output samples.
@@ -422,7 +429,11 @@ def simulate_prescribed(
         x0 = np.linalg.solve(c0.K, c0.f)
     knots = np.asarray(motion.trajectory.times_s, dtype=float)
     nx2 = nx * nx
+    total = 3
     if exact:
+        if progress is not None:
+            progress(1, total)
+
         def coeff(t):
             c = system.coefficients(t)
             return c.M, c.C, c.K, c.f
@@ -434,7 +445,14 @@ def simulate_prescribed(
 
         grid = np.unique(np.concatenate([
             np.linspace(a, b, per_interval(a, b) + 1) for a, b in zip(knots[:-1], knots[1:])]))
-        cs = [system.coefficients(t) for t in grid]
+        total = grid.size + 3
+        if progress is not None:
+            progress(1, total)
+        cs = []
+        for k, t in enumerate(grid):
+            cs.append(system.coefficients(t))
+            if progress is not None:
+                progress(k + 2, total)
         nx2 = nx * nx
         packed = np.stack([np.concatenate([c.M.ravel(), c.C.ravel(), c.K.ravel(), c.f])
                            for c in cs])
@@ -492,6 +510,8 @@ def simulate_prescribed(
         atol_vec = np.concatenate([np.full(nx, atol), np.full(nx, atol * omega1)])
         run1 = integrate(fun, jac, motion.t0, motion.t1, np.concatenate([x0, np.zeros(nx)]),
                          method=method, rtol=rtol, atol=atol_vec)
+    if progress is not None:
+        progress(total - 1, total)
     # hold phase: constant coefficients at the final pose, exact propagation
     cend = system.coefficients(motion.t1)  # joints at rest there; forces frozen from here
     Aend, bend = system.state_matrix(cend)
@@ -533,6 +553,8 @@ def simulate_prescribed(
         a_tau = a_tau @ P.T
         system = system.full
     tau = np.array([system.torque(t, y, a) for t, y, a in zip(t_tau, y_tau, a_tau)])
+    if progress is not None:
+        progress(total, total)
     return Simulation(
         times_s=times, x=x, xd=xd, q=q, qd=qd, q_physical=q_phys, stop_s=motion.t1,
         drive="prescribed", joint_condition="locked", torque_times_s=t_tau, torques=tau,

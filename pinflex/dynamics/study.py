@@ -181,8 +181,14 @@ def check_drive(model, trajectory, settings: SimulationSettings) -> None:
             "constant in them)")
 
 
-def simulate_design(model, trajectory, y, settings: SimulationSettings, name: str):
-    """Simulate one design of a study; returns ``(report, simulation, dynamics)``."""
+def simulate_design(model, trajectory, y, settings: SimulationSettings, name: str,
+                    progress=None):
+    """Simulate one design of a study; returns ``(report, simulation, dynamics)``.
+
+    ``progress``, when given, is called as ``progress(done, total)`` by the prescribed drive
+    (:func:`~pinflex.dynamics.prescribed.simulate_prescribed`); the torque drive reports
+    nothing before it ends.
+    """
     from pinflex.dynamics.prescribed import simulate_prescribed
     from pinflex.dynamics.response import vibration_report
     from pinflex.dynamics.terms import ErlsDynamics
@@ -196,7 +202,8 @@ def simulate_design(model, trajectory, y, settings: SimulationSettings, name: st
                                   damping=settings.damping, sample_hz=settings.sample_hz,
                                   rho_inf=settings.rho_inf, tol=settings.tol,
                                   terms=settings.terms, strict=settings.strict,
-                                  validity_threshold=settings.validity_threshold)
+                                  validity_threshold=settings.validity_threshold,
+                                  progress=progress)
     else:
         from pinflex.dynamics.motion import JointMotion
 
