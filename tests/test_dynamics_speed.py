@@ -17,10 +17,9 @@ import scipy.integrate
 from arms import CHORDWISE, FLAPWISE, rotating_cantilever, table_close
 
 from pinflex import FlexibleModel, beam
-from pinflex.cases.spin_up import KANE_URDF, SPIN_UP_S
+from pinflex.cases.spin_up import KANE_URDF, SPIN_UP_S, SpinUp
 from pinflex.dynamics import ErlsDynamics, simulate_prescribed
 from pinflex.dynamics.modes import modes_at_speed
-from pinflex.dynamics.motion import JointMotion
 from pinflex.exceptions import ModelValidityError, ModelValidityWarning
 
 #: Kane, Ryan and Banerjee (1987): L = 10 m, EI = 1.4e4 N m², ρA = 1.2 kg/m (EA = 1.4e7 N);
@@ -28,41 +27,6 @@ from pinflex.exceptions import ModelValidityError, ModelValidityWarning
 KANE, TS = KANE_URDF, SPIN_UP_S
 OMEGA1 = 1.875104068711961**2 * math.sqrt(1.4e4 / (1.2 * 10.0**4))  # cantilever, rad/s
 
-
-class SpinUp(JointMotion):
-    """θ(t) = (Ωs/Ts)[t²/2 + (Ts/2π)²(cos 2πt/Ts − 1)] for t ≤ Ts (Kane et al.)."""
-
-    def __init__(self, omega_s: float, knots_s: float = 0.1):
-        from types import SimpleNamespace
-
-        self.W = omega_s
-        self.t0, self.t1 = 0.0, TS
-        times = np.arange(0.0, TS + 1e-9, knots_s)
-        self.trajectory = SimpleNamespace(times_s=times, q=self.theta(times)[:, None])
-        self.q_start, self.q_end = np.zeros(1), np.array([self.theta(TS)])
-
-    def theta(self, t):
-        """Hub angle [rad] (held at its final value after Ts)."""
-        t = np.clip(np.asarray(t, dtype=float), 0.0, TS)
-        c = (TS / (2 * math.pi)) ** 2
-        return self.W / TS * (t**2 / 2 + c * (np.cos(2 * math.pi * t / TS) - 1))
-
-    def rates(self, t):
-        """Hub rate [rad/s] and acceleration [rad/s²]."""
-        t = np.clip(np.asarray(t, dtype=float), 0.0, TS)
-        qd = self.W / TS * (t - TS / (2 * math.pi) * np.sin(2 * math.pi * t / TS))
-        qdd = self.W / TS * (1 - np.cos(2 * math.pi * t / TS))
-        return qd, qdd
-
-    def __call__(self, t):
-        """``(q, q̇, q̈)`` at one time, as :class:`JointMotion`."""
-        qd, qdd = self.rates(t)
-        return np.array([self.theta(t)]), np.array([qd]), np.array([qdd])
-
-    def sample(self, times):
-        """``(q, q̇, q̈)`` at many times, each (n, 1)."""
-        qd, qdd = self.rates(times)
-        return self.theta(times)[:, None], np.asarray(qd)[:, None], np.asarray(qdd)[:, None]
 
 
 def rotating_frame_matrices(*, n=10, L=10.0, EI=1.4e4, EA=1.4e7, rhoA=1.2):
