@@ -107,6 +107,22 @@ def add_robot_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--planar", action="store_true", help="keep in-plane elastic dofs only")
 
 
+def add_speed_arguments(p: argparse.ArgumentParser, *, terms_help: str, rates_when: str,
+                        motion_note: str = "") -> None:
+    """Add ``--terms``, ``--at-speed`` and ``--rates``, shared by modes and export.
+
+    The moving-state options of ``pinflex modes`` and ``pinflex export``; read back by
+    :func:`speed_terms`.
+    """
+    p.add_argument("--terms", choices=("eq1", "full"), help=terms_help)
+    p.add_argument("--at-speed", action="store_true", help="the same as --terms full")
+    p.add_argument("--rates", choices=("samples", "motion"), default="samples",
+                   help=f"{rates_when} joint velocities and accelerations by second-order "
+                   "finite differences of the samples (samples, default) or from the "
+                   "rest-to-rest quintic spline through them that pinflex simulate drives "
+                   f"(motion{motion_note})")
+
+
 def speed_terms(args: argparse.Namespace) -> str | None:
     """The terms of ``--terms`` / ``--at-speed`` (None: the frozen-pose model)."""
     from pinflex.exceptions import ConfigurationError

@@ -8,6 +8,7 @@ import numpy as np
 
 from pinflex.cli.common import (
     add_robot_arguments,
+    add_speed_arguments,
     joint_value,
     parse_values,
     robot_description,
@@ -42,19 +43,14 @@ def add_parser(sub) -> None:
                    "m/s] (every joint held by its motor: needs --joints locked)")
     p.add_argument("--qdd", type=joint_value, nargs="+", metavar="V",
                    help="joint accelerations at --q [rad/s^2 or m/s^2] (with --qd or alone)")
-    p.add_argument("--terms", choices=("eq1", "full"),
-                   help="linearise about the moving state (--qd/--qdd, or with --trajectory "
-                   "each sample's, velocities and accelerations by second-order finite "
-                   "differences of the samples) with eq. (1)'s gyroscopic terms only (eq1, "
-                   "the default with --qd/--qdd) or with the centrifugal, Euler and "
-                   "geometric-stiffness terms (full); see docs/exports.md")
-    p.add_argument("--at-speed", action="store_true", help="the same as --terms full")
-    p.add_argument("--rates", choices=("samples", "motion"), default="samples",
-                   help="with --trajectory and --terms: joint velocities and accelerations by "
-                   "second-order finite differences of the samples (samples, default) or from "
-                   "the rest-to-rest quintic spline through them that pinflex simulate drives "
-                   "(motion: the exported model is then the prescribed simulation's at each "
-                   "sample)")
+    add_speed_arguments(
+        p, terms_help="linearise about the moving state (--qd/--qdd, or with --trajectory "
+        "each sample's, velocities and accelerations by second-order finite differences of "
+        "the samples) with eq. (1)'s gyroscopic terms only (eq1, the default with --qd/--qdd) "
+        "or with the centrifugal, Euler and geometric-stiffness terms (full); see "
+        "docs/exports.md",
+        rates_when="with --trajectory and --terms:",
+        motion_note=": the exported model is then the prescribed simulation's at each sample")
     p.add_argument("--out", required=True,
                    help="output file: .npz or .mat (linear model), .xml (MJCF), .urdf")
     p.add_argument("--format", choices=("linear", "mjcf", "urdf"),

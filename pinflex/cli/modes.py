@@ -9,6 +9,7 @@ import numpy as np
 
 from pinflex.cli.common import (
     add_robot_arguments,
+    add_speed_arguments,
     bounded_value,
     inertia_text,
     joints_text,
@@ -30,18 +31,13 @@ def add_parser(sub) -> None:
     p.add_argument("--trajectory", metavar="CSV",
                    help="joint trajectory (header: t, joint names): frequencies along the "
                    "motion, modes followed by their shapes (default 3 modes)")
-    p.add_argument("--terms", choices=("eq1", "full"),
-                   help="with --trajectory: the modes of the MOVING arm (modes at speed: every "
-                   "joint held by its motor on the motion, velocities and accelerations from "
-                   "the samples by second-order finite differences) with eq. (1)'s gyroscopic "
-                   "terms only (eq1) or with the centrifugal, Euler and geometric-stiffness "
-                   "terms (full); without it: the modes of the arm frozen at each pose")
-    p.add_argument("--at-speed", action="store_true", help="the same as --terms full")
-    p.add_argument("--rates", choices=("samples", "motion"), default="samples",
-                   help="with --terms: joint velocities and accelerations by second-order "
-                   "finite differences of the samples (samples, default) or from the "
-                   "rest-to-rest quintic spline through them that pinflex simulate drives "
-                   "(motion)")
+    add_speed_arguments(
+        p, terms_help="with --trajectory: the modes of the MOVING arm (modes at speed: every "
+        "joint held by its motor on the motion, velocities and accelerations from the samples "
+        "by second-order finite differences) with eq. (1)'s gyroscopic terms only (eq1) or "
+        "with the centrifugal, Euler and geometric-stiffness terms (full); without it: the "
+        "modes of the arm frozen at each pose",
+        rates_when="with --terms:")
     p.add_argument("--strict", action="store_true",
                    help="with --trajectory: refuse a motion too fast for eq. (1) (validity "
                    "indicator above its threshold) instead of warning")
