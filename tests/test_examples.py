@@ -213,22 +213,12 @@ def _sized_on_the_exact_model(arm: str, floor: float, capsys):
 
 
 @pytest.mark.slow
-def test_ur3_sizing_study_meets_its_floor_with_the_quoted_mass(capsys):
-    """The UR3 tube sizing on its servo springs keeps mode 1 at 26 Hz with less tube mass."""
-    name = "real_arms/ur3_size.toml"
-    out, slsqp = _sized_on_the_exact_model("ur3", 26.0, capsys)
-    page = _section(name)
-    assert f"design mass {out['mass_start_kg']:.4f} kg → {out['mass_kg']:.4f} kg" in page
-    start, end = out["min_freq_start_hz"][0], out["min_freq_hz"][0]
-    assert f"{start:.2f} Hz to {end:.2f} Hz" in page
-    assert f"SLSQP on the exact model from it: {slsqp:.4f} kg" in page
-
-
-@pytest.mark.slow
-def test_z1_sizing_study_meets_its_floor_with_the_quoted_mass(capsys):
-    """The Z1 tube sizing on its servo springs keeps mode 1 at 12.5 Hz with less tube mass."""
-    name = "real_arms/z1_size.toml"
-    out, slsqp = _sized_on_the_exact_model("z1", 12.5, capsys)
+@pytest.mark.parametrize("arm, floor, name", [("ur3", 26.0, "real_arms/ur3_size.toml"),
+                                              ("z1", 12.5, "real_arms/z1_size.toml")])
+def test_real_arm_sizing_study_meets_its_floor_with_the_quoted_mass(arm, floor, name, capsys):
+    """The UR3 (26 Hz) and Z1 (12.5 Hz) tube sizings on their servo springs keep mode 1 at its
+    floor with less tube mass, and the page quotes the run."""
+    out, slsqp = _sized_on_the_exact_model(arm, floor, capsys)
     page = _section(name)
     assert f"design mass {out['mass_start_kg']:.4f} kg → {out['mass_kg']:.4f} kg" in page
     start, end = out["min_freq_start_hz"][0], out["min_freq_hz"][0]
