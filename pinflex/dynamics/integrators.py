@@ -94,6 +94,7 @@ class NewmarkRun:
         self.t, self.x, self.v, self.a = t, x, v, a
         self.steps = t.size - 1
         self.nfev = nfev
+        self.rejected_corrector = 0  # steps halved because the corrector did not converge
         self.y_end = np.concatenate([x[-1], v[-1]])
 
     def __call__(self, times):
@@ -113,9 +114,15 @@ class NewmarkRun:
         return np.hstack([x, v])
 
 
+#: A state-dependent step's corrector has converged when its last change of the displacements
+#: is at most this fraction of the step's error tolerance (:func:`newmark`).
+CORRECTOR_TOLERANCE = 1e-2
+
+
 def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-4,
             h_min=1e-9, rho_inf: float = 0.9, corrections: int = 0,
-            groups=None, fixed_steps: int | None = None) -> NewmarkRun:
+            groups=None, fixed_steps: int | np.ndarray | None = None,
+            scale: str = "step") -> NewmarkRun:
     """Generalized-α (Chung–Hulbert 1993) integration of ``M(t) ẍ + C(t) ẋ + K(t) x = f(t)``.
 
     A Newmark scheme with ``α_m = (2ρ∞ − 1)/(ρ∞ + 1)``, ``α_f = ρ∞/(ρ∞ + 1)``,
@@ -141,13 +148,21 @@ def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-
         h_min: Smallest step [s]; a step this small is accepted whatever its error.
         rho_inf: Spectral radius at infinite frequency, in [0, 1].
         corrections: For a state-dependent system, ``coeff(t, x, v)`` is evaluated at the
-            predicted state and then this many times at the corrected one (each time the
-            step is solved again with the new coefficients); 0 for a linear system
-            ``coeff(t)``.
+            predicted state and then at most this many times at the corrected one (each time
+            the step is solved again with the new coefficients: a fixed-point iteration)
+            until the last correction changes the displacements by at most
+            :data:`CORRECTOR_TOLERANCE` of the error tolerance; a step whose corrector has not
+            converged is retried at half the size (with ``fixed_steps``:
+            :class:`SimulationError`). Stiff state-dependent forces belong in ``C`` and ``K``
+            (solved implicitly), not in ``f``: a fixed-point iteration on them converges only
+            for steps below their time constant. 0 for a linear system ``coeff(t)``.
         groups: Optional ``[(rows, atol), ...]``: coordinate groups with their own absolute
             tolerance, each controlled separately (default: all with ``atol``).
-        fixed_steps: Take this many equal steps and no error control (``rtol``, ``atol``,
-            ``h0`` unused).
+        fixed_steps: Take this many equal steps, or steps between these times (from ``t0``
+            to ``t1``), and no error control (``rtol``, ``atol``, ``h0`` unused).
+        scale: What ``rtol`` is relative to: ``"step"`` the step's own ``|x|`` (largest of
+            both ends, per group), ``"peak"`` the largest ``|x|`` of the group so far in the
+            run (errors relative to the peak deflection; ``atol`` only a floor).
     """
     if not 0.0 <= rho_inf <= 1.0:
         raise ConfigurationError(f"rho_inf = {rho_inf!r} must lie in [0, 1]")
@@ -161,14 +176,35 @@ def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-
     groups = [(slice(None), atol)] if groups is None else groups
     T, X, V, Aa = [t0], [x], [v], [a]
     t, h, nfev = t0, min(h0, t1 - t0), 1
-    if fixed_steps is not None:
+    rejected_corrector, change = 0, float("nan")
+    if scale not in ("step", "peak"):
+        raise ConfigurationError(f"scale = {scale!r} must be 'step' or 'peak'")
+    peak = [float(np.abs(x[r]).max(initial=0.0)) if scale == "peak" else 0.0
+            for r, _ in groups]
+
+    def norm(e, x_new):
+        """Largest ``|e|`` over ``atol + rtol · scale`` of each group."""
+        return max(float(np.abs(e[r]).max(initial=0.0))
+                   / (tol + rtol * max(float(np.abs(x_new[r]).max(initial=0.0)),
+                                       float(np.abs(x[r]).max(initial=0.0)), p))
+                   for (r, tol), p in zip(groups, peak))
+
+    step_grid = None
+    if fixed_steps is not None and np.ndim(fixed_steps) == 1:
+        step_grid = np.asarray(fixed_steps, dtype=float)
+        if not (step_grid[0] == t0 and step_grid[-1] == t1 and np.all(np.diff(step_grid) > 0)):
+            raise ConfigurationError("fixed_steps (times) must rise from t0 to t1")
+    elif fixed_steps is not None:
         h = (t1 - t0) / int(fixed_steps)
     while t < t1 - 1e-14 * max(1.0, abs(t1)):
+        if step_grid is not None:
+            h = step_grid[len(T)] - t
         h = min(h, t1 - t)
         xp = x + h * v + (0.5 - beta) * h * h * a
         vp = v + (1 - gamma) * h * a
         x1, v1, a1 = xp, vp, a
-        for _ in range(corrections + 1):
+        converged = not corrections
+        for it in range(corrections + 1):
             tm = t + (1.0 - af) * h
             if corrections:
                 M, C, K, f = coeff(tm, (1 - af) * x1 + af * x, (1 - af) * v1 + af * v)
@@ -187,14 +223,28 @@ def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-
             if not np.all(np.isfinite(a1)):
                 raise SimulationError(f"the run diverged at t = {tm:.6g} s: take smaller or "
                                       "adaptive steps")
-            x1 = xp + beta * h * h * a1
+            x_new = xp + beta * h * h * a1
+            if it:  # the corrector's change, in the error norm: converged well below it
+                change = norm(x_new - x1, x_new)
+                converged = change <= CORRECTOR_TOLERANCE
+            x1 = x_new
             v1 = vp + gamma * h * a1
-        est = np.abs((beta - 1.0 / 6.0) * h * h * (a1 - a))
-        err = max(float(est[r].max()) / (tol + rtol * max(float(np.abs(x1[r]).max()),
-                                                            float(np.abs(x[r]).max())))
-                  for r, tol in groups)
+            if converged:
+                break
+        if not converged:  # the corrector (a fixed-point iteration) has not converged
+            if fixed_steps is not None:
+                raise SimulationError(
+                    f"the step at t = {t:.6g} s did not converge in {corrections} corrections "
+                    f"(last change {change:.3g} of the tolerance): take smaller or adaptive "
+                    "steps, or more corrections")
+            if h > h_min:
+                h = max(0.5 * h, h_min)
+                rejected_corrector += 1
+                continue
+        err = norm((beta - 1.0 / 6.0) * h * h * (a1 - a), x1)
         if fixed_steps is not None:
-            t = t0 + len(T) * (t1 - t0) / int(fixed_steps)
+            t = (step_grid[len(T)] if step_grid is not None
+                 else t0 + len(T) * (t1 - t0) / int(fixed_steps))
             x, v, a = x1, v1, a1
             T.append(t)
             X.append(x)
@@ -204,13 +254,18 @@ def newmark(coeff, t0: float, t1: float, x0, v0, *, rtol=1e-4, atol=1e-9, h0=1e-
         if err <= 1.0 or h <= h_min:
             t += h
             x, v, a = x1, v1, a1
+            if scale == "peak":
+                peak = [max(p, float(np.abs(x[r]).max(initial=0.0)))
+                        for (r, _), p in zip(groups, peak)]
             T.append(t)
             X.append(x)
             V.append(v)
             Aa.append(a)
         h *= min(2.0, max(0.3, 0.9 * (1.0 / max(err, 1e-12)) ** (1.0 / 3.0)))
         h = max(h, h_min)
-    return NewmarkRun(np.array(T), np.array(X), np.array(V), np.array(Aa), nfev)
+    run = NewmarkRun(np.array(T), np.array(X), np.array(V), np.array(Aa), nfev)
+    run.rejected_corrector = rejected_corrector
+    return run
 
 
 def fixed_step(coeffs, t0: float, t1: float, n_steps: int, x0, v0, *, rho_inf: float = 1.0,

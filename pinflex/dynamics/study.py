@@ -14,8 +14,8 @@ Example (all keys optional; the defaults shown)::
     # tol = 0.01                # prescribed drive (default: absent): the time step halves
                                 # until the Richardson estimate of the step error (relative
                                 # to the largest elastic coordinate) meets it
-    rtol = 1e-4                 # torque drive: step control
-    atol = 1e-9                 # [m, rad]
+    rtol = 1e-4                 # torque drive: step control (relative to the peak)
+    atol = 1e-14                # [m, rad]: its floor
     rho_inf = 0.9               # torque drive: generalized-alpha high-frequency radius
                                 # (prescribed: 1, the trapezoidal rule, unless given)
     # step_s = 2e-4             # torque drive (default: adaptive, rtol/atol): fixed steps
@@ -68,7 +68,7 @@ class SimulationSettings:
     point: tuple[float, float, float] = (0.0, 0.0, 0.0)
     sample_hz: float = 5000.0
     rtol: float = 1e-4
-    atol: float = 1e-9
+    atol: float = 1e-14
     rho_inf: float | None = None
     tol: float | None = None
     step_s: float | None = None

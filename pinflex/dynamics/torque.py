@@ -34,6 +34,11 @@ from pinflex.trajectory.samples import in_model_order
 from pinflex.validation import require_number
 
 
+#: The adaptive route's error estimate compares the run with one at this many times its
+#: ``rtol`` (see :func:`simulate_torque`).
+ESTIMATE_FACTOR = 10.0
+
+
 def simulate_torque(
     dyn: ErlsDynamics,
     *,
@@ -49,10 +54,10 @@ def simulate_torque(
     damping: Damping | None = None,
     sample_hz: float = 5000.0,
     rtol: float = 1e-5,
-    atol: float = 1e-10,
-    atol_q: float = 1e-9,
+    atol: float = 1e-14,
+    atol_q: float = 1e-12,
     rho_inf: float = 0.9,
-    corrections: int = 1,
+    corrections: int = 4,
     coefficient_step_s: float = 0.0,
     step_s: float | None = None,
     strict: bool = False,
@@ -86,11 +91,22 @@ def simulate_torque(
         damping: Rayleigh damping of the elastic motion (``"modal"`` is not available here:
             the modes change with the pose).
         sample_hz: Output rate [Hz].
-        rtol: Relative tolerance.
-        atol: Absolute tolerance on ``x`` [m, rad].
-        atol_q: Absolute tolerance on ``q`` [rad].
+        rtol: Relative tolerance of the adaptive steps' local error, relative to the largest
+            ``|x|`` (and ``|q|``) so far in the run. The route's result converges to the
+            equations' solution as ``rtol`` shrinks (benchmark A's first 50 ms against
+            ``scipy``'s Radau at rtol 1e-8: 3.3e-4, 1.0e-4, 1.4e-5, 3.2e-6 of the largest
+            elastic coordinate at rtol 1e-4 … 1e-7); the global error is some 3-30 times
+            ``rtol``: read ``Simulation.error_estimate``.
+        atol: Absolute floor of the tolerance on ``x`` [m, rad] (where the run has not moved
+            yet).
+        atol_q: Absolute floor of the tolerance on ``q`` [rad].
         rho_inf: Generalized-α high-frequency spectral radius (1: no numerical damping).
-        corrections: Corrector evaluations of eq. (1) per step (see :func:`.newmark`).
+        corrections: At most this many corrector evaluations of eq. (1) per step; the
+            iteration stops when converged and a step that does not converge is retried at
+            half the size (see :func:`.newmark`). The servo's feedback is solved implicitly
+            (its ``k_p GᵀG``, ``k_d GᵀG`` in the step's matrices); a ``torque`` function is a
+            load evaluated at the corrector's state (a stiff feedback in it makes the steps
+            small).
         coefficient_step_s: The pose-dependent terms ``M(q)``, ``C_k(q)``, ``F(q)`` and the
             joint rows are evaluated exactly at most every ``coefficient_step_s`` of simulated
             time, at the integrator's current state, and extrapolated in time in between by
@@ -121,7 +137,11 @@ def simulate_torque(
             ``rtol``, ``atol``, ``atol_q``, ``rho_inf``, ``corrections``,
             ``coefficient_step_s`` and ``step_s`` belong to the other route.
             ``"nonlinear"`` (the default otherwise): the nonlinear equations of motion by
-            generalized-α (adaptive or ``step_s``); about 10³ times slower on benchmark A.
+            generalized-α (adaptive or ``step_s``); adaptive, ``Simulation.error_estimate``
+            is ``max |x − x'| / max |x|`` against a second run at :data:`ESTIMATE_FACTOR`
+            times ``rtol`` (on the safe side while the error shrinks at least twice per
+            factor; benchmark A's first 50 ms against Radau: 3-8 times the error at rtol
+            1e-4 … 1e-7).
         steps: ``route="linear"``: trapezoidal steps ``N`` of the coarser run over the motion
             (default ``motion × sample_hz / 2``, at least 8).
         tol: ``route="linear"``: halve the steps until the Richardson estimate is at most
@@ -231,17 +251,35 @@ def simulate_torque(
         if damping.kind == "rayleigh":  # the deformation's, motors held (linalg.held_rayleigh)
             C += held_rayleigh(M, K, G, nx, damping.alpha, damping.beta)
         C += dyn.joint_damping(z[nx:])  # joint dampers (zero without them)
-        f = F + G.T @ applied(t, z, zd, G, None) + K @ z_ref
-        return M, C, K, f
+        f = F + K @ z_ref
+        if torque is None and motion is not None and ff is not None:
+            # the servo's feedback Gᵀ(k_p (C q_r − G z) + k_d (C q̇_r − G ż)) goes into the
+            # step's matrices (k_p GᵀG, k_d GᵀG at this pose), so the corrector solves it
+            # implicitly: a stiff servo (k_d on the first element: ~1e6 1/s on benchmark A)
+            # made the fixed-point corrector diverge unless h was about a microsecond
+            qr, qdr, _ = motion(t)
+            GG = G.T @ G
+            f = f + G.T @ (ff(t) + kp * (Cm @ qr) + kd * (Cm @ qdr))
+            return M, C + kd * GG, K + kp * GG, f
+        return M, C, K, f + G.T @ applied(t, z, zd, G, None)
 
     tic = time.perf_counter()
     kw: dict[str, Any] = {"rtol": rtol, "atol": atol, "h0": min(1.0 / sample_hz, duration_s / 10),
           "rho_inf": rho_inf, "corrections": max(1, int(corrections)),
-          "groups": [(slice(0, nx), atol), (slice(nx, nd), atol_q)]}
+          "groups": [(slice(0, nx), atol), (slice(nx, nd), atol_q)], "scale": "peak"}
     run: Any
     estimate = float("nan")
     if step_s is None:
         run = newmark(coeff, 0.0, duration_s, z0, zd0, **kw)
+        # its error estimate: the change from a run at ESTIMATE_FACTOR x looser rtol
+        history.clear()
+        loose = newmark(coeff, 0.0, duration_s, z0, zd0,
+                        **{**kw, "rtol": min(ESTIMATE_FACTOR * rtol, 0.1)})
+        history.clear()
+        tt = np.union1d(run.t, loose.t)
+        xr, xl = run(tt)[:, :nx], loose(tt)[:, :nx]
+        estimate = float(np.abs(xr - xl).max() / max(float(np.abs(xr).max()), 1e-300))
+        run.nfev += loose.nfev
     else:
         check_positive(step_s=step_s)
         n = max(2, int(np.ceil(duration_s / step_s - 1e-9)))
