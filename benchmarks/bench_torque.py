@@ -6,8 +6,11 @@ masses, planar) driven by the rigid computed torque plus a PD servo on the motor
 process with single-thread BLAS (``interleave.pin_single_thread``), rounds interleaved (the
 order alternates):
 
-* ``nonlinear`` (``route="nonlinear"``, adaptive generalized-α on the nonlinear equations) on
-  the first ``--duration`` seconds: the old route, too slow for the whole motion;
+* ``nonlinear`` (``route="nonlinear"``, adaptive generalized-α on the nonlinear equations, its
+  servo implicit, with its error estimate from a second run at 10x ``rtol``) on the first
+  ``--duration`` seconds (the servo's start, its most expensive part); with
+  ``--nonlinear-full`` also once on the whole motion plus ``--after`` (at ``--nonlinear-rtol``),
+  and the linear route's runs compared with it;
 * ``linear`` (``route="linear"``, the default: linearised about the rigid computed-torque
   motion, :mod:`pinflex.dynamics.torque_linear`) on the same first seconds, and on the whole
   motion plus ``--after`` seconds held.
@@ -60,6 +63,10 @@ def main(argv=None) -> int:
                         help="also run the PD servo in Exudyn (the peers extra)")
     parser.add_argument("--peer-steps", type=float, nargs="+", default=[1e-4, 5e-5, 2.5e-5],
                         metavar="H", help="Exudyn time steps [s] (default 1e-4 5e-5 2.5e-5)")
+    parser.add_argument("--nonlinear-rtol", type=float, default=1e-5,
+                        help="rtol of the nonlinear route (default 1e-5)")
+    parser.add_argument("--nonlinear-full", action="store_true",
+                        help="also run the nonlinear route on the whole motion (once)")
     args = parser.parse_args(argv)
     model = benchmark_model()
     motion = JointMotion(benchmark_trajectory(model))
@@ -71,6 +78,8 @@ def main(argv=None) -> int:
         return np.array([(tip(q)[0] @ x)[:2] for q, x in zip(sim.q, sim.x)])
 
     def run(route, duration, **kw):
+        if route == "nonlinear":
+            kw.setdefault("rtol", args.nonlinear_rtol)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             c0 = time.process_time()
@@ -114,6 +123,16 @@ def main(argv=None) -> int:
         "full_joint_deviation_rad": float(np.abs(
             full.q_physical - motion.sample(full.times_s)[0]).max()),
     }
+    out["nonlinear_full"] = None
+    if args.nonlinear_full:
+        nl, c = run("nonlinear", full_s)
+        out["nonlinear_full"] = {
+            "rtol": args.nonlinear_rtol, "cpu_per_simulated_s": c, "steps": nl.steps,
+            "error_estimate": nl.error_estimate,
+            "linear_vs_nonlinear": {"x": rel(full.x, nl.x),
+                                    "tip": rel(tip_deflection(full), tip_deflection(nl))},
+            "linear_8x_vs_nonlinear": {"x": rel(ref.x, nl.x),
+                                       "tip": rel(tip_deflection(ref), tip_deflection(nl))}}
     out["peer"] = None
     if args.peer:
         from peer_exudyn import compare_servo_with_exudyn
@@ -156,6 +175,14 @@ def main(argv=None) -> int:
           f"{out['full_linearisation_error']:.2e}; tip peak "
           f"{1e3 * out['full_tip_peak_m']:.4f} mm, joint deviation "
           f"{out['full_joint_deviation_rad']:.2e} rad")
+    d = out["nonlinear_full"]
+    if d is not None:
+        print(f"  nonlinear route, whole run (rtol {d['rtol']:g}, one run): "
+              f"{d['cpu_per_simulated_s']:.2f} CPU-s per simulated s, {d['steps']} steps, "
+              f"estimate {d['error_estimate']:.2e}; linear route vs it: "
+              f"{d['linear_vs_nonlinear']['x']:.2e} (tip {d['linear_vs_nonlinear']['tip']:.2e}), "
+              f"linear 8x steps vs it: {d['linear_8x_vs_nonlinear']['x']:.2e} "
+              f"(tip {d['linear_8x_vs_nonlinear']['tip']:.2e})")
     for p in out["peer"] or []:
         ch = p["change_from_coarser"]
         print(f"  peer ({p['model']}): {p['cpu_per_simulated_s']:.3f} CPU-s per simulated s; "
