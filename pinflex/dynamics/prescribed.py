@@ -56,7 +56,7 @@ from pinflex.dynamics.integrators import (
 )
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, SimulationError, check_positive, output_times
-from pinflex.dynamics.speed import check_terms, speed_stiffness
+from pinflex.dynamics.speed import check_terms, locked_speed_stiffness, speed_stiffness
 from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.erls.validity import VALIDITY_THRESHOLD, Validity
 from pinflex.exceptions import ConfigurationError
@@ -132,16 +132,23 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     if terms == "full":
         from pinflex.dynamics.speed_scope import check_full_terms
 
-        check_full_terms(dyn, q, qd, qdd)  # joints on deforming links: refused by name
-        K = K + speed_stiffness(dyn, q, qd, qdd)
+        check_full_terms(dyn, q, qd, qdd)  # mass off the beam axes: named in a warning
+        K = K + speed_stiffness(dyn, q, qd, qdd)  # the joint rows' terms, for the torques
     C = np.tensordot(qd, Ck, axes=(0, 0))
     zq = np.concatenate([np.zeros(nx), qd])
     Cq = np.stack([Ck[k] @ zq for k in range(nv)], axis=1) if nv else np.zeros((dyn.ndof, 0))
     Ad = np.tensordot(qd, Adk, axes=(0, 0)) if nv else np.zeros((0, nx))
     ML = Z.T @ M @ Z
     CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
-    KL = Z.T @ K @ Z if terms == "full" else K_eq1
     rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
+    KL = K_eq1
+    if terms == "full" and np.any(A):
+        # joints on deforming links: the second variation of the locked system, with the
+        # loads' static state (the forces the joints pass on) for the root copies' turn
+        statics = np.linalg.solve(K_eq1, Z.T @ (F - rigid))
+        KL = K_eq1 + locked_speed_stiffness(dyn, q, qd, qdd, statics)
+    elif terms == "full":
+        KL = Z.T @ K @ Z  # no elastic joint offset: the terms of speed_stiffness are exact
     F = F + force
     return _Coefficients(ML, CL, KL, Z.T @ (F - rigid), A, (M, Ck, K, F), K_eq1)
 

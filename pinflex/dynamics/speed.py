@@ -116,3 +116,153 @@ def _add_geometric(dyn, Ks, J, Jd, R, e, qd, qdd, force) -> None:
         a0, w, al = link_motion(J[link], Jd[link], qd, qdd)
         line[link] = (a0 - R[link].T @ dyn.gravity, skew(al) + skew(w) @ skew(w))
     Ks[:dyn.nx, :dyn.nx] += geometric_stiffness(plan, R, line, force, e, dyn.nx)
+
+
+#: Step of the central differences of the locked system's load terms, as a rotation [rad]
+#: (fourth-order stencil of exact first-order quantities: error about 1e-12 relative).
+STEP = 1e-3
+
+
+def _world_maps(dyn, q, qd):
+    """Per translational carrier group: ``(m, P1, Ṗ1, S̃, Ẽ)`` in world axes at ``(q, q̇)``.
+
+    ``P1 = R (E + S A)`` maps the elastic coordinates to the point displacements of the locked
+    system (the joints held at ``q_phys``, so ``q = q_phys + A x``); ``Ṗ1`` is its rate along
+    the motion ``q̇``; ``S̃ = R S`` and ``Ẽ = R E`` are the points' Jacobians over ``q`` and ``x``.
+    """
+    J, Jd, R, e, ed = dyn._kinematics(q)
+    A, Adk = dyn.joint_offsets(q)
+    Ad = np.tensordot(qd, Adk, axes=(0, 0))
+    out = []
+    for p in dyn._points:
+        W, Gk, Sdk, S, _ = dyn._maps(p, J, Jd, e, ed)
+        E = W[..., :dyn.nx]
+        V = E + S @ A
+        Vd = (np.tensordot(qd, Gk, axes=(0, 0)) + np.tensordot(qd, Sdk, axes=(0, 0)) @ A
+              + S @ Ad)
+        Rl = R[p.link]
+        out.append((p.mass, Rl @ V, Rl @ Vd, Rl @ S, Rl @ E))
+    return out, A
+
+
+def locked_speed_stiffness(dyn, q, qd, qdd, statics=None) -> np.ndarray:
+    """The locked system's stiffness of the rigid motion's loads (nx, nx), beyond ``Zᵀ K Z``.
+
+    With the joints held (``q = q_phys(t) + A x``) a material point sits at
+    ``P(t, x) = P0 + P1 x + ½ P2[x, x] + …`` and the second variation of the action gives
+    ``M_L ẍ + 2 Σ m P1ᵀ Ṗ1 ẋ + (Zᵀ K Z + K_L) x = f`` with
+
+        K_L = Σ m P1ᵀ P̈1 + Σ f0 · P2 + K_G,      f0 = m (P̈0 − g),
+
+    ``P̈1`` the second time derivative of ``P1`` along the rigid motion and ``P2`` the Hessian
+    of the point's position over ``x`` through ``q = q_phys + A(q) x`` (the joints' subtrees
+    turn by ``A x``, the root copies of the elastic twists turn with them). ``P̈1`` is the
+    fourth-order central difference of the exact ``Ṗ1`` along the motion ``q + q̇ τ +
+    q̈ τ²/2``; the ``q`` derivatives of ``Σ W̃ᵀ f0`` and ``A`` (only along the joints with an
+    elastic offset) are fourth-order central differences of exact first derivatives.
+    """
+    q, qd, qdd = (np.asarray(v, dtype=float) for v in (q, qd, qdd))
+    nx, nv = dyn.nx, dyn.nv
+    K = np.zeros((nx, nx))
+    base, A = _world_maps(dyn, q, qd)
+    # rigid accelerations and loads f0 (world) at the state
+    J, Jd, R, e, ed = dyn._kinematics(q)
+    loads = []
+    for p in dyn._points:
+        _, _, Sdk, S, _ = dyn._maps(p, J, Jd, e, ed)
+        acc = S @ qdd + np.einsum("k,knaj,j->na", qd, Sdk, qd)
+        loads.append(p.mass[:, None] * (acc @ R[p.link].T - dyn.gravity[None, :]))
+    # Σ m P1ᵀ P̈1 along the motion
+    scale = max(float(np.abs(qd).max(initial=0.0)), float(np.sqrt(np.abs(qdd).max(initial=0.0))))
+    if scale > 0.0:
+        h = STEP / scale
+        w = {-2: 1.0, -1: -8.0, 1: 8.0, 2: -1.0}
+        acc1 = [np.zeros_like(b[1]) for b in base]
+        for k, c in w.items():
+            tau = k * h
+            side, _ = _world_maps(dyn, q + qd * tau + 0.5 * qdd * tau * tau, qd + qdd * tau)
+            for i, s in enumerate(side):
+                acc1[i] += c / (12.0 * h) * s[2]
+        for (m, P1, _, _, _), Pdd in zip(base, acc1):
+            K += np.einsum("n,nax,nay->xy", m, P1, Pdd)
+    # Σ f0 · P2: the Hessian of the loads' work Σ f0 · P(q_phys + A(q) x, x)
+    offset = [k for k in range(nv) if np.any(A[k])]
+    if offset and any(np.any(f) for f in loads):
+        def gen(qq):
+            maps, AA = _world_maps(dyn, qq, np.zeros(nv))
+            gx = sum(np.einsum("nax,na->x", Et, f) for (_, _, _, _, Et), f in zip(maps, loads))
+            gq = sum(np.einsum("naj,na->j", St, f) for (_, _, _, St, _), f in zip(maps, loads))
+            return gx, gq, AA
+
+        g0x, g0q, _ = gen(q)
+        dgx = np.zeros((nx, nv))
+        dgq = np.zeros((nv, nv))
+        dA = np.zeros((nv, nv, nx))  # dA[l] = ∂A/∂q_l
+        for l in offset:
+            for k, c in {-2: 1.0, -1: -8.0, 1: 8.0, 2: -1.0}.items():
+                dq = np.zeros(nv)
+                dq[l] = k * STEP
+                gx, gq, AA = gen(q + dq)
+                dgx[:, l] += c / (12.0 * STEP) * gx
+                dgq[:, l] += c / (12.0 * STEP) * gq
+                dA[l] += c / (12.0 * STEP) * AA
+        H = dgx @ A + (dgx @ A).T + A.T @ (0.5 * (dgq + dgq.T)) @ A
+        # the held angle q − A(q) x is linear in x only at fixed q: q's curvature in x
+        D = np.einsum("k,lka,lb->ab", g0q, dA, A)
+        K += H + D + D.T
+        K += _root_copy_turn(dyn, q, offset, A, statics)
+    _add_geometric_locked(dyn, K, J, Jd, R, e, qd, qdd, loads)
+    return K
+
+
+def _add_geometric_locked(dyn, K, J, Jd, R, e, qd, qdd, loads) -> None:
+    """Add ``K_G`` of the beams' axial force (:func:`_add_geometric`'s rule) to ``K``."""
+    force = {}
+    for p, f in zip(dyn._points, loads):
+        force[p.link] = [(p.c[p.n_beam:], f[p.n_beam:] @ R[p.link])]
+    plan = dyn.model.plan
+    line = {}
+    for link in plan.beams:
+        a0, w, al = link_motion(J[link], Jd[link], qd, qdd)
+        line[link] = (a0 - R[link].T @ dyn.gravity, skew(al) + skew(w) @ skew(w))
+    K += geometric_stiffness(plan, R, line, force, e, dyn.nx)
+
+
+def _root_copy_turn(dyn, q, offset, A, xs) -> np.ndarray:
+    """The force a joint passes on times the turn of its child's root copy (nx, nx).
+
+    A child beam's root copy is the parent's attachment twist in the child's axes, which turn
+    with the joint (``q = q_phys + A x``), while the child's other nodes keep their
+    coordinates (their share of the joint point's translation ``t`` turns with the child): the
+    strain energy ``½ (b(q) x)ᵀ K (b(q) x)`` (``b = sel + root e(q)``) has, at the loads'
+    static state ``x_s``, the Hessian term ``2 sym(Σ_l ∂bᵀ/∂q_l F A_l)`` with the root node's
+    force ``F = (K b x_s)[root translation]``: the joint turns about its displaced point. The
+    root node's moment is left out, as the beams' ``K_G`` leaves out bending-moment prestress
+    (with it a beam split at a joint and bent across the joint's axis by its weight was 1.6e-3
+    off the one beam it is).
+    """
+    nx, nv = dyn.nx, dyn.nv
+    if xs is None or not np.any(xs):
+        return np.zeros((nx, nx))
+    plan = dyn.model.plan
+    e0, _ = dyn._root_twists(q)
+    forces = {}
+    for link, bp in plan.beams.items():
+        sel, root, _, _, stiffness = bp.kept
+        el = e0.get(link)
+        if el is not None:
+            force = np.asarray(bp.rows) < 3  # the root node's translation rows
+            forces[link] = np.where(force, stiffness @ ((sel + root @ el) @ xs), 0.0)
+    if not forces:
+        return np.zeros((nx, nx))
+    dg = np.zeros((nx, nv))
+    for l in offset:
+        for k, c in {-2: 1.0, -1: -8.0, 1: 8.0, 2: -1.0}.items():
+            dq = np.zeros(nv)
+            dq[l] = k * STEP
+            e, _ = dyn._root_twists(q + dq)
+            for link, F in forces.items():
+                bp = plan.beams[link]
+                dg[:, l] += c / (12.0 * STEP) * ((bp.kept[1] @ e[link]).T @ F)
+    out = dg @ A
+    return out + out.T
