@@ -107,9 +107,12 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
                         force=0.0) -> _Coefficients:
     """The locked-joint system (undamped) of the elastic motion on a rigid state.
 
-    ``Zᵀ M Z ẍ + C_L ẋ + Zᵀ K Z x = Zᵀ (F − M [0; q̈] − C(q̇) [0; q̇])`` of the module doc,
-    with ``K_s`` (:func:`pinflex.dynamics.speed.speed_stiffness`) added to ``K`` for
-    ``terms="full"``.
+    ``Zᵀ M Z ẍ + C_L ẋ + Zᵀ K Z x = Zᵀ (F − M [0; q̈] − C(q̇) [0; q̇])`` of the module doc.
+    With ``terms="full"`` the stiffness gains the speed terms: ``Zᵀ K_s Z``
+    (:func:`pinflex.dynamics.speed.speed_stiffness`) when no joint has an elastic offset
+    (``A = 0``: moving joints on rigid links), else the locked system's second variation
+    (:func:`pinflex.dynamics.speed.locked_speed_stiffness`, with the loads' static state for
+    the forces the joints pass on). ``full`` carries ``K + K_s`` for the motor torques.
 
     Args:
         dyn: Equations of motion.

@@ -10,8 +10,9 @@ more terms of first order in the elastic displacement ``u = E x``,
 and a beam carries the axial force ``N(s)`` of the inertial and gravity loads outboard of its
 section ``s``, whose second-order strain energy ``½ ∫ N (v'² + w'²) ds`` is the geometric
 stiffness ``K_G`` (tension stiffens, compression softens; :func:`pinflex.beam.
-element_geometric_stiffness`, :func:`pinflex.erls.preload.geometric_stiffness`). The centrifugal term softens what ``K_G`` stiffens: on a spinning
-beam the chordwise modes keep ``ω² = ω²_flap − Ω²``; the two are added together or not at all.
+element_geometric_stiffness`, :func:`pinflex.erls.preload.geometric_stiffness`). The
+centrifugal term softens what ``K_G`` stiffens: on a spinning beam the chordwise modes keep
+``ω² = ω²_flap − Ω²``; the two are added together or not at all.
 
 The virtual work of the inertial forces on the displaced point adds, in the joint rows, the
 moment of ``f_i = m_i (a_i − g)`` about the displacement: the point's Jacobian is ``X(c + u) J =
@@ -26,8 +27,15 @@ all evaluated on the rigid motion (``x = 0``). ``N(s)`` is exact for the beam's 
 subtree at its joint. Left out: prestress from torsion and shear, the terms of the torsional
 rotary inertia ``ρIp``, and products of two elastic quantities.
 
-:func:`validity` measures how far eq. (1) holds: ``|ω_L|² / ω_i²`` and ``|α_L| / ω_i²`` (the
-relative size of the terms above) per sample and mode.
+For a moving joint on a deforming link (an elastic offset ``A x`` of the held joint) these
+terms are not the whole second variation: the joint's subtree turns by ``A x`` and its child's
+root copy turns with it. :func:`locked_speed_stiffness` then gives the locked system's
+stiffness from the material points' positions to second order (its docstring);
+:func:`speed_stiffness` stays the route of arms whose moving joints sit on rigid links, where
+both agree to 1e-9.
+
+:mod:`pinflex.erls.validity` measures how far eq. (1) holds: ``|ω_L|² / ω_i²`` and
+``|α_L| / ω_i²`` (the relative size of the terms above) per sample and mode.
 """
 
 from __future__ import annotations
@@ -160,6 +168,17 @@ def locked_speed_stiffness(dyn, q, qd, qdd, statics=None) -> np.ndarray:
     fourth-order central difference of the exact ``Ṗ1`` along the motion ``q + q̇ τ +
     q̈ τ²/2``; the ``q`` derivatives of ``Σ W̃ᵀ f0`` and ``A`` (only along the joints with an
     elastic offset) are fourth-order central differences of exact first derivatives.
+
+    Args:
+        dyn: The :class:`~pinflex.dynamics.ErlsDynamics` (its gravity is a load).
+        q: Physical joint coordinates (nv,) [rad or m] (user convention).
+        qd: Joint velocities (nv,).
+        qdd: Joint accelerations (nv,).
+        statics: The locked system's static state ``x_s`` (nx,) under the same loads, for
+            the forces the joints pass on (:func:`_root_copy_turn`); None leaves them out.
+
+    Returns:
+        ``K_L`` (nx, nx) [N/m, N, N m], to be added to ``Zᵀ K Z``.
     """
     q, qd, qdd = (np.asarray(v, dtype=float) for v in (q, qd, qdd))
     nx, nv = dyn.nx, dyn.nv
@@ -198,14 +217,14 @@ def locked_speed_stiffness(dyn, q, qd, qdd, statics=None) -> np.ndarray:
         dgx = np.zeros((nx, nv))
         dgq = np.zeros((nv, nv))
         dA = np.zeros((nv, nv, nx))  # dA[l] = ∂A/∂q_l
-        for l in offset:
+        for j in offset:
             for k, c in {-2: 1.0, -1: -8.0, 1: 8.0, 2: -1.0}.items():
                 dq = np.zeros(nv)
-                dq[l] = k * STEP
+                dq[j] = k * STEP
                 gx, gq, AA = gen(q + dq)
-                dgx[:, l] += c / (12.0 * STEP) * gx
-                dgq[:, l] += c / (12.0 * STEP) * gq
-                dA[l] += c / (12.0 * STEP) * AA
+                dgx[:, j] += c / (12.0 * STEP) * gx
+                dgq[:, j] += c / (12.0 * STEP) * gq
+                dA[j] += c / (12.0 * STEP) * AA
         H = dgx @ A + (dgx @ A).T + A.T @ (0.5 * (dgq + dgq.T)) @ A
         # the held angle q − A(q) x is linear in x only at fixed q: q's curvature in x
         D = np.einsum("k,lka,lb->ab", g0q, dA, A)
@@ -256,13 +275,13 @@ def _root_copy_turn(dyn, q, offset, A, xs) -> np.ndarray:
     if not forces:
         return np.zeros((nx, nx))
     dg = np.zeros((nx, nv))
-    for l in offset:
+    for j in offset:
         for k, c in {-2: 1.0, -1: -8.0, 1: 8.0, 2: -1.0}.items():
             dq = np.zeros(nv)
-            dq[l] = k * STEP
+            dq[j] = k * STEP
             e, _ = dyn._root_twists(q + dq)
             for link, F in forces.items():
                 bp = plan.beams[link]
-                dg[:, l] += c / (12.0 * STEP) * ((bp.kept[1] @ e[link]).T @ F)
+                dg[:, j] += c / (12.0 * STEP) * ((bp.kept[1] @ e[link]).T @ F)
     out = dg @ A
     return out + out.T
