@@ -20,6 +20,7 @@ import pytest
 import scipy.integrate
 import scipy.linalg
 from arms import CHORDWISE, rotating_cantilever, table_close
+from reference_fe import beam_fe as _beam_fe
 
 from pinflex import FlexibleModel
 from pinflex.cases.spin_up import KANE_URDF, SPIN_UP_S, SpinUp
@@ -31,43 +32,9 @@ from pinflex.exceptions import ModelValidityWarning
 L, EI, EA, RHOA = 10.0, 1.4e4, 1.4e7, 1.2
 
 
-def beam_fe(n, N, *, L=L, EI=EI, EA=EA, rhoA=RHOA):
-    """``(M, G, K, K_N, fu, fv)`` of the beam clamped at ``s = 0``, axial ``u``, bending ``v``.
-
-    ``K_N`` is the geometric stiffness ``∫ N(s) v'² ds`` of the axial force ``N(s)``;
-    ``G = Muvᵀ − Muv`` (the Coriolis coupling: ``2Ω G``); ``fu``, ``fv`` the loads
-    ``∫ ρA s N ds`` on ``u`` and ``v`` (centrifugal per unit Ω², Euler per unit θ̈). Node dofs
-    ``(u, v, θ)``, the root's removed.
-    """
-    le = L / n
-    gx, gw = np.polynomial.legendre.leggauss(6)
-    xi, w = 0.5 * (gx + 1.0), 0.5 * gw * le
-    nd = 3 * (n + 1)
-    Muu, Mvv, Muv, K, KN = (np.zeros((nd, nd)) for _ in range(5))
-    fu, fv = np.zeros(nd), np.zeros(nd)
-    for e in range(n):
-        s = (e + xi) * le
-        Nu, dNu, Nv, dNv, ddNv = (np.zeros((xi.size, nd)) for _ in range(5))
-        Nu[:, 3 * e], Nu[:, 3 * e + 3] = 1.0 - xi, xi
-        dNu[:, 3 * e], dNu[:, 3 * e + 3] = -1.0 / le, 1.0 / le
-        cols = [3 * e + 1, 3 * e + 2, 3 * e + 4, 3 * e + 5]
-        Nv[:, cols] = np.stack([1 - 3 * xi**2 + 2 * xi**3, le * (xi - 2 * xi**2 + xi**3),
-                                3 * xi**2 - 2 * xi**3, le * (xi**3 - xi**2)], axis=1)
-        dNv[:, cols] = np.stack([(6 * xi**2 - 6 * xi) / le, 1 - 4 * xi + 3 * xi**2,
-                                 (6 * xi - 6 * xi**2) / le, 3 * xi**2 - 2 * xi], axis=1)
-        ddNv[:, cols] = np.stack([(12 * xi - 6) / le**2, (6 * xi - 4) / le,
-                                  (6 - 12 * xi) / le**2, (6 * xi - 2) / le], axis=1)
-        Muu += rhoA * np.einsum("k,ki,kj->ij", w, Nu, Nu)
-        Mvv += rhoA * np.einsum("k,ki,kj->ij", w, Nv, Nv)
-        Muv += rhoA * np.einsum("k,ki,kj->ij", w, Nu, Nv)
-        K += EA * np.einsum("k,ki,kj->ij", w, dNu, dNu)
-        K += EI * np.einsum("k,ki,kj->ij", w, ddNv, ddNv)
-        KN += np.einsum("k,k,ki,kj->ij", w, N(s), dNv, dNv)
-        fu += rhoA * np.einsum("k,k,ki->i", w, s, Nu)
-        fv += rhoA * np.einsum("k,k,ki->i", w, s, Nv)
-    keep = np.arange(3, nd)
-    Muu, Mvv, Muv, K, KN = (a[np.ix_(keep, keep)] for a in (Muu, Mvv, Muv, K, KN))
-    return Muu + Mvv, Muv.T - Muv, K, KN, fu[keep], fv[keep]
+def beam_fe(n, N):
+    """Kane's beam of ``n`` elements under the axial force ``N(s)`` (``reference_fe.beam_fe``)."""
+    return _beam_fe(n, N, L=L, EI=EI, EA=EA, rhoA=RHOA)
 
 
 def spin_n(omega):
