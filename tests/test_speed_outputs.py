@@ -389,9 +389,11 @@ def test_full_terms_on_a_deforming_link_and_the_lever_warning(kane_path, tmp_pat
         modes_at_speed(one, [0.0], [6.0], n_modes=3).freq_hz, rel=1e-8)
     assert linear_model_at_state(locked, [0.0, 0.0], [1.0, 0.0], terms="eq1")["A"].shape == (
         2 * locked.nx, 2 * locked.nx)
-    # a tip mass beside the beam's axis: the lever terms are named in a warning
+    # a body beside the beam's axis: the lever terms are named in a warning (a point mass's
+    # are in the terms, tests/test_speed_joints.py)
     offset = tmp_path / "offset.urdf"
-    offset.write_text(KANE_URDF.replace("</robot>", '<pinflex:point_mass name="tip" link="beam" '
-                                        'xyz="10 0.3 0" mass="2"/></robot>'))
+    offset.write_text(KANE_URDF.replace("</robot>", '<pinflex:body name="tip" link="beam" '
+                                        'xyz="10 0.3 0" mass="2" ixx="0.01" iyy="0.01" '
+                                        'izz="0.01"/></robot>'))
     with pytest.warns(ModelValidityWarning, match="lever terms .* on beam"):
         modes_at_speed(ErlsDynamics(FlexibleModel(offset, planar=True)), [0.0], [1.0])

@@ -56,7 +56,12 @@ from pinflex.dynamics.integrators import (
 )
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, SimulationError, check_positive, output_times
-from pinflex.dynamics.speed import check_terms, locked_speed_stiffness, speed_stiffness
+from pinflex.dynamics.speed import (
+    check_terms,
+    has_point_mass_levers,
+    locked_speed_stiffness,
+    speed_stiffness,
+)
 from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.erls.validity import VALIDITY_THRESHOLD, Validity
 from pinflex.exceptions import ConfigurationError
@@ -145,10 +150,10 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
     rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
     KL = K_eq1
-    if terms == "full" and np.any(A):
-        # joints on deforming links: the second variation of the locked system, with the
-        # loads' static state (the forces the joints pass on) for the root copies' turn
-        statics = np.linalg.solve(K_eq1, Z.T @ (F - rigid))
+    if terms == "full" and (np.any(A) or has_point_mass_levers(dyn)):
+        # joints on deforming links (or point masses off the beam axes): the second variation
+        # of the locked system, with the loads' static state for the root copies' turn
+        statics = np.linalg.solve(K_eq1, Z.T @ (F - rigid)) if np.any(A) else None
         KL = K_eq1 + locked_speed_stiffness(dyn, q, qd, qdd, statics)
     elif terms == "full":
         KL = Z.T @ K @ Z  # no elastic joint offset: the terms of speed_stiffness are exact

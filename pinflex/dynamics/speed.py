@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pinflex.erls.preload import geometric_stiffness
+from pinflex.erls.preload import geometric_stiffness, lever_offset, lever_stiffness
 from pinflex.linalg import skew
 
 TERMS = ("eq1", "full")
@@ -231,7 +231,60 @@ def locked_speed_stiffness(dyn, q, qd, qdd, statics=None) -> np.ndarray:
         K += H + D + D.T
         K += _root_copy_turn(dyn, q, offset, A, statics)
     _add_geometric_locked(dyn, K, J, Jd, R, e, qd, qdd, loads)
+    K += point_mass_levers(dyn, J, Jd, R, e, qd, qdd)
     return K
+
+
+def point_mass_levers(dyn, J, Jd, R, e, qd, qdd) -> np.ndarray:
+    """The lever term of point masses off their beam's axis (nx, nx).
+
+    A point mass at the offset ``r`` from the section it rides on (the axis point at its
+    clipped station, or a rigid link's origin) sits, to second order in the section's elastic
+    rotation ``θ``, at ``… + θ × r + ½ θ × (θ × r)``: its load ``F = −m (a − g)`` adds
+    ``θᵀ ((F·r) 𝟙 − sym(F rᵀ)) θ`` (:func:`pinflex.erls.preload.lever_stiffness`; a hanging
+    mass stiffens, a standing one softens). The section's rotation is that of the point's
+    attachment twist; the links' own frame rotations are exact in the positions already.
+    """
+    model = dyn.model
+    plan = model.plan
+    K = np.zeros((dyn.nx, dyn.nx))
+    for pm in plan.point_masses:
+        c = np.asarray(pm.xyz, dtype=float)
+        r = lever_offset(plan, pm.link, c[None])[0]
+        att = pm.attach
+        el = e.get(pm.link)
+        if not np.any(r) or (att.const is None and (att.lin is None or el is None)):
+            continue
+        theta = np.zeros((3, dyn.nx)) if att.const is None else att.const[3:].copy()
+        if att.lin is not None and el is not None:
+            theta += att.lin[3:] @ el
+        d = plan.design.mass_index.get(pm.name, -1)
+        mass = float(dyn.y[d]) if d >= 0 else float(model.point_mass_values[pm.name])
+        a0, w, al = link_motion(J[pm.link], Jd[pm.link], qd, qdd)
+        acc = a0 + np.cross(al, c) + np.cross(w, np.cross(w, c))
+        F = -mass * (acc - R[pm.link].T @ dyn.gravity)
+        K += theta.T @ lever_stiffness(F[None], r[None]) @ theta
+    return K
+
+
+def has_point_mass_levers(dyn) -> bool:
+    """Whether a point mass sits off the axis of a link that moves elastically (cached)."""
+    hit = getattr(dyn, "_point_mass_levers", None)
+    if hit is None:
+        hit = dyn._point_mass_levers = _point_mass_levers(dyn)
+    return hit
+
+
+def _point_mass_levers(dyn) -> bool:
+    e, _ = dyn._root_twists(np.zeros(dyn.nv))
+    plan = dyn.model.plan
+    for pm in plan.point_masses:
+        r = lever_offset(plan, pm.link, np.asarray(pm.xyz, dtype=float)[None])[0]
+        att = pm.attach
+        if np.any(r) and (att.const is not None or (att.lin is not None
+                                                   and e.get(pm.link) is not None)):
+            return True
+    return False
 
 
 def _add_geometric_locked(dyn, K, J, Jd, R, e, qd, qdd, loads) -> None:

@@ -12,9 +12,11 @@ and loaded across its axis (an angular acceleration, gravity across the beam) di
 one beam at second order in that load (2e-7 relative at 2 rad/s² on Kane's beam): both leave
 those terms out, in different places.
 
-**Loads off the beam axes** (point masses and bodies beside a beam, rigid links carried by a
-beam): the second-order rise of a rigid lever under its load, ``θ × (θ × r) / 2`` for the
-beams' elastic rotations ``θ``, is not in the terms. :func:`check_full_terms` warns with
+**Loads off the beam axes**: a load at an offset ``r`` from the section it rides on rises by
+``θ × (θ × r) / 2`` as the section turns by ``θ``. For point masses this lever term is in the
+full terms (:func:`pinflex.dynamics.speed.point_mass_levers`; an off-axis tip mass on a
+spinning beam equals a rotating-frame FE with a rigid lever to 1e-9). For bodies beside a beam
+and rigid links carried by a beam it is not: :func:`check_full_terms` warns with
 :class:`~pinflex.exceptions.ModelValidityWarning` naming the links; the lever term is of
 relative size ``offset / length`` of the speed terms there.
 """
@@ -32,7 +34,8 @@ _CHECKED: weakref.WeakSet = weakref.WeakSet()  # dynamics whose levers were look
 
 
 def levers(dyn) -> list[str]:
-    """Links carrying mass off a beam axis that moves elastically (module doc)."""
+    """Links carrying mass off a beam axis that moves elastically, other than point masses
+    (their lever term is in :func:`pinflex.dynamics.speed.point_mass_levers`; module doc)."""
     plan = dyn.model.plan
     moving = set(plan.beams)
     for j in plan.joints:  # parents first
@@ -44,6 +47,11 @@ def levers(dyn) -> list[str]:
             continue
         c = p.c[p.n_beam:]
         m = p.mass[p.n_beam:]
+        pms = [np.asarray(pm.xyz, dtype=float) for pm in plan.point_masses if pm.link == p.link]
+        if pms:  # the point masses' own carriers
+            own = np.any(np.all(np.abs(c[:, None, :] - np.array(pms)[None]) <= 1e-15, axis=2),
+                         axis=1)
+            c, m = c[~own], m[~own]
         bp = plan.beams.get(p.link)
         if bp is not None:
             ex = bp.spec.tip / bp.spec.length_m
@@ -69,7 +77,7 @@ def check_full_terms(dyn, q, qd, qdd) -> None:
         off = levers(dyn)
         if off:
             warnings.warn(
-                f"terms='full' leaves out the lever terms of the mass off the beam axes on "
+                f"terms='full' leaves out the lever terms of the bodies and rigid links off the beam axes on "
                 f"{', '.join(sorted(set(off)))} (a load at an offset r rises by "
                 "θ×(θ×r)/2 as the section turns): of relative size offset/length of the "
                 "speed terms (pinflex.dynamics.speed_scope)", ModelValidityWarning,
