@@ -366,11 +366,11 @@ def _split_beam(folder):
     return path
 
 
-def test_full_terms_on_a_deforming_link_and_the_lever_warning(kane_path, tmp_path, capsys):
+def test_full_terms_on_a_deforming_link(kane_path, tmp_path, capsys):
     """terms='full' with a joint on a deforming link: Kane's beam split at a held elbow is the
     one beam at speed (it was 79 % off the table at γ = 10 before the joints' terms, and then
     refused), in Python and through the export command (the exported A's frequencies); eq.
-    (1)'s terms are served too. Mass off the beam axis is warned about (the lever terms)."""
+    (1)'s terms are served too."""
     split = FlexibleModel(_split_beam(tmp_path), planar=True)
     one = ErlsDynamics(FlexibleModel(kane_path, planar=True))
     two = ErlsDynamics(split)
@@ -389,11 +389,3 @@ def test_full_terms_on_a_deforming_link_and_the_lever_warning(kane_path, tmp_pat
         modes_at_speed(one, [0.0], [6.0], n_modes=3).freq_hz, rel=1e-8)
     assert linear_model_at_state(locked, [0.0, 0.0], [1.0, 0.0], terms="eq1")["A"].shape == (
         2 * locked.nx, 2 * locked.nx)
-    # a body beside the beam's axis: the lever terms are named in a warning (a point mass's
-    # are in the terms, tests/test_speed_joints.py)
-    offset = tmp_path / "offset.urdf"
-    offset.write_text(KANE_URDF.replace("</robot>", '<pinflex:body name="tip" link="beam" '
-                                        'xyz="10 0.3 0" mass="2" ixx="0.01" iyy="0.01" '
-                                        'izz="0.01"/></robot>'))
-    with pytest.warns(ModelValidityWarning, match="lever terms .* on beam"):
-        modes_at_speed(ErlsDynamics(FlexibleModel(offset, planar=True)), [0.0], [1.0])

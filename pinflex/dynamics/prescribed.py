@@ -58,7 +58,7 @@ from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, SimulationError, check_positive, output_times
 from pinflex.dynamics.speed import (
     check_terms,
-    has_point_mass_levers,
+    has_levers,
     locked_speed_stiffness,
     speed_stiffness,
 )
@@ -115,7 +115,8 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     ``Zᵀ M Z ẍ + C_L ẋ + Zᵀ K Z x = Zᵀ (F − M [0; q̈] − C(q̇) [0; q̇])`` of the module doc.
     With ``terms="full"`` the stiffness gains the speed terms: ``Zᵀ K_s Z``
     (:func:`pinflex.dynamics.speed.speed_stiffness`) when no joint has an elastic offset
-    (``A = 0``: moving joints on rigid links), else the locked system's second variation
+    (``A = 0``: moving joints on rigid links) and no load is held off a beam's axis, else the
+    locked system's second variation
     (:func:`pinflex.dynamics.speed.locked_speed_stiffness`, with the loads' static state for
     the forces the joints pass on). ``full`` carries ``K + K_s`` for the motor torques.
 
@@ -138,9 +139,6 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     Z = np.vstack([np.eye(nx), A])
     K_eq1 = Z.T @ K @ Z
     if terms == "full":
-        from pinflex.dynamics.speed_scope import check_full_terms
-
-        check_full_terms(dyn, q, qd, qdd)  # mass off the beam axes: named in a warning
         K = K + speed_stiffness(dyn, q, qd, qdd)  # the joint rows' terms, for the torques
     C = np.tensordot(qd, Ck, axes=(0, 0))
     zq = np.concatenate([np.zeros(nx), qd])
@@ -150,9 +148,9 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
     rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
     KL = K_eq1
-    if terms == "full" and (np.any(A) or has_point_mass_levers(dyn)):
-        # joints on deforming links (or point masses off the beam axes): the second variation
-        # of the locked system, with the loads' static state for the root copies' turn
+    if terms == "full" and (np.any(A) or has_levers(dyn)):
+        # joints on deforming links or loads held off the beam axes: the second variation of
+        # the locked system, with the loads' static state for the root copies' turn
         statics = np.linalg.solve(K_eq1, Z.T @ (F - rigid)) if np.any(A) else None
         KL = K_eq1 + locked_speed_stiffness(dyn, q, qd, qdd, statics)
     elif terms == "full":

@@ -29,10 +29,23 @@ rotary inertia ``ρIp``, and products of two elastic quantities.
 
 For a moving joint on a deforming link (an elastic offset ``A x`` of the held joint) these
 terms are not the whole second variation: the joint's subtree turns by ``A x`` and its child's
-root copy turns with it. :func:`locked_speed_stiffness` then gives the locked system's
-stiffness from the material points' positions to second order (its docstring);
-:func:`speed_stiffness` stays the route of arms whose moving joints sit on rigid links, where
-both agree to 1e-9.
+root copy turns with it; and a load held off a beam's axis rises by ``θ × (θ × r) / 2`` as the
+section turns (the lever term). :func:`locked_speed_stiffness` then gives the locked system's
+stiffness from the material points' positions to second order (its docstring; levers in
+:func:`lever_terms`); :func:`speed_stiffness` stays the route of arms whose moving joints sit
+on rigid links with their loads on the beam axes, where both agree to 1e-9. A beam cut into
+links at held joints is the one beam it is, spinning or under its weight, to 1e-12; a mass
+held off the axis as a point mass, a body, a rigid link or through a joint off the axis is a
+rotating-frame FE with a rigid lever to 1e-12 (``tests/test_speed_joints.py``).
+
+Left out, as in the beams' ``K_G``: bending-moment and torsion prestress, and what the
+static deflection does to the stiffness. A beam cut at a joint and loaded across its axis (an
+angular acceleration, gravity across the beam, a mass held beside it) differs from the one
+beam at second order in that load (2e-7 relative at 2 rad/s² on Kane's beam): both leave those
+terms out, in different places. Spatial arms: the levers and the joints' terms are checked
+with the joint axes across the beams; where a joint's axis rotation and the root copy's
+rotation across it combine (a lever off a joint turning about the beam's axis), the order of
+the two small rotations is ERLS's (axis rotation exact, the other linear).
 
 :mod:`pinflex.erls.validity` measures how far eq. (1) holds: ``|ω_L|² / ω_i²`` and
 ``|α_L| / ω_i²`` (the relative size of the terms above) per sample and mode.
@@ -231,60 +244,114 @@ def locked_speed_stiffness(dyn, q, qd, qdd, statics=None) -> np.ndarray:
         K += H + D + D.T
         K += _root_copy_turn(dyn, q, offset, A, statics)
     _add_geometric_locked(dyn, K, J, Jd, R, e, qd, qdd, loads)
-    K += point_mass_levers(dyn, J, Jd, R, e, qd, qdd)
+    K += lever_terms(dyn, J, Jd, R, e, qd, qdd, loads)
     return K
 
 
-def point_mass_levers(dyn, J, Jd, R, e, qd, qdd) -> np.ndarray:
-    """The lever term of point masses off their beam's axis (nx, nx).
+def lever_terms(dyn, J, Jd, R, e, qd, qdd, loads) -> np.ndarray:
+    """The lever terms of loads held off the beam axes (nx, nx).
 
-    A point mass at the offset ``r`` from the section it rides on (the axis point at its
+    A load ``F`` held at the offset ``r`` from the section it rides on (the axis point at its
     clipped station, or a rigid link's origin) sits, to second order in the section's elastic
-    rotation ``θ``, at ``… + θ × r + ½ θ × (θ × r)``: its load ``F = −m (a − g)`` adds
-    ``θᵀ ((F·r) 𝟙 − sym(F rᵀ)) θ`` (:func:`pinflex.erls.preload.lever_stiffness`; a hanging
-    mass stiffens, a standing one softens). The section's rotation is that of the point's
-    attachment twist; the links' own frame rotations are exact in the positions already.
+    rotation ``θ``, at ``… + θ × r + ½ θ × (θ × r)``, which adds ``θᵀ ((F·r) 𝟙 − sym(F rᵀ)) θ``
+    (:func:`pinflex.erls.preload.lever_stiffness`; a hanging mass stiffens, a standing one
+    softens). Here ``F = −m (a − g)`` of every point mass on a beam, of the points of a body on
+    a beam (their offsets from the body's section), of the points on rigid links that move
+    elastically (``θ`` their root twist's rotation), and the loads of every subtree carried at
+    a joint off its parent's axis. The links' own frame rotations are exact in the positions.
+
+    Args:
+        dyn: The :class:`~pinflex.dynamics.ErlsDynamics`.
+        J: Link Jacobians (``dyn._kinematics``).
+        Jd: Their rates per unit joint velocity.
+        R: Link rotations in the world frame.
+        e: Root twists of the links (or None).
+        qd: Joint velocities (nv,).
+        qdd: Joint accelerations (nv,).
+        loads: ``m (a − g)`` (n, 3) world, per carrier group of ``dyn._points``.
+
+    Returns:
+        The lever terms (nx, nx) [N m].
     """
+    from pinflex.dynamics.carriers import _equivalent_points
+
     model = dyn.model
     plan = model.plan
     K = np.zeros((dyn.nx, dyn.nx))
-    for pm in plan.point_masses:
-        c = np.asarray(pm.xyz, dtype=float)
-        r = lever_offset(plan, pm.link, c[None])[0]
-        att = pm.attach
-        el = e.get(pm.link)
-        if not np.any(r) or (att.const is None and (att.lin is None or el is None)):
-            continue
-        theta = np.zeros((3, dyn.nx)) if att.const is None else att.const[3:].copy()
-        if att.lin is not None and el is not None:
-            theta += att.lin[3:] @ el
-        d = plan.design.mass_index.get(pm.name, -1)
-        mass = float(dyn.y[d]) if d >= 0 else float(model.point_mass_values[pm.name])
-        a0, w, al = link_motion(J[pm.link], Jd[pm.link], qd, qdd)
+
+    def applied(link, c, m):  # −m (a − g) of points c (n, 3) of a link, link axes
+        a0, w, al = link_motion(J[link], Jd[link], qd, qdd)
         acc = a0 + np.cross(al, c) + np.cross(w, np.cross(w, c))
-        F = -mass * (acc - R[pm.link].T @ dyn.gravity)
-        K += theta.T @ lever_stiffness(F[None], r[None]) @ theta
+        return -m[:, None] * (acc - R[link].T @ dyn.gravity)
+
+    def rotation(att, link):  # (3, nx) elastic rotation of an attachment, or None
+        el = e.get(link)
+        out = None if att.const is None else att.const[3:].copy()
+        if att.lin is not None and el is not None:
+            out = att.lin[3:] @ el if out is None else out + att.lin[3:] @ el
+        return out
+
+    for pm in plan.point_masses:
+        theta = rotation(pm.attach, pm.link)
+        c = np.asarray(pm.xyz, dtype=float)[None]
+        r = lever_offset(plan, pm.link, c)
+        if pm.link not in plan.beams or theta is None or not np.any(r):
+            continue  # on rigid links: with the link's points below
+        d = plan.design.mass_index.get(pm.name, -1)
+        m = float(dyn.y[d]) if d >= 0 else float(model.point_mass_values[pm.name])
+        K += theta.T @ lever_stiffness(applied(pm.link, c, np.array([m])), r) @ theta
+    for body in plan.bodies:
+        theta = rotation(body.attach, body.link)
+        if theta is None:
+            continue
+        mass = float(body.inertia[0, 0])
+        com = np.asarray(body.xyz, dtype=float)
+        c, m = _equivalent_points(mass, com, body.inertia[3:, 3:])  # as the carriers
+        r = c - (com - lever_offset(plan, body.link, com[None])[0])
+        K += theta.T @ lever_stiffness(applied(body.link, c, m), r) @ theta
+    for p in dyn._points:
+        el = e.get(p.link)
+        if p.link in plan.beams or el is None:
+            continue
+        theta = el[3:]
+        K += theta.T @ lever_stiffness(applied(p.link, p.c, p.mass), p.c) @ theta
+    # subtrees carried at joints off their parent's axis
+    total = {p.link: -f.sum(axis=0) for p, f in zip(dyn._points, loads)}  # world
+    sub: dict = {}
+    for j in reversed(plan.joints):  # children before parents
+        sub[j.child] = sub.get(j.child, np.zeros(3)) + total.get(j.child, np.zeros(3))
+        sub[j.parent] = sub.get(j.parent, np.zeros(3)) + sub[j.child]
+    for j in plan.joints:
+        theta = rotation(j.attach, j.parent)
+        r = lever_offset(plan, j.parent, np.asarray(j.xyz, dtype=float)[None])
+        if theta is None or not np.any(r):
+            continue
+        F = (R[j.parent].T @ sub[j.child])[None]
+        K += theta.T @ lever_stiffness(F, r) @ theta
     return K
 
 
-def has_point_mass_levers(dyn) -> bool:
-    """Whether a point mass sits off the axis of a link that moves elastically (cached)."""
-    hit = getattr(dyn, "_point_mass_levers", None)
+def has_levers(dyn) -> bool:
+    """Whether a load is held off the axis of a link that moves elastically (cached)."""
+    hit = getattr(dyn, "_has_levers", None)
     if hit is None:
-        hit = dyn._point_mass_levers = _point_mass_levers(dyn)
+        plan = dyn.model.plan
+        e, _ = dyn._root_twists(np.zeros(dyn.nv))
+
+        def moves(att, link):
+            return att.const is not None or (att.lin is not None and e.get(link) is not None)
+
+        def off(link, c):
+            return bool(np.any(lever_offset(plan, link, np.asarray(c, dtype=float)[None])))
+
+        hit = (any(moves(pm.attach, pm.link) and off(pm.link, pm.xyz)
+                   for pm in plan.point_masses)
+               or any(moves(b.attach, b.link) for b in plan.bodies)
+               or any(p.link not in plan.beams and e.get(p.link) is not None
+                      for p in dyn._points)
+               or any(moves(j.attach, j.parent) and off(j.parent, j.xyz) for j in plan.joints))
+        dyn._has_levers = hit
     return hit
-
-
-def _point_mass_levers(dyn) -> bool:
-    e, _ = dyn._root_twists(np.zeros(dyn.nv))
-    plan = dyn.model.plan
-    for pm in plan.point_masses:
-        r = lever_offset(plan, pm.link, np.asarray(pm.xyz, dtype=float)[None])[0]
-        att = pm.attach
-        if np.any(r) and (att.const is not None or (att.lin is not None
-                                                   and e.get(pm.link) is not None)):
-            return True
-    return False
 
 
 def _add_geometric_locked(dyn, K, J, Jd, R, e, qd, qdd, loads) -> None:
