@@ -12,7 +12,9 @@ Three groups of references:
   the elbow, either of which may instead carry a torsional spring or be clamped;
 * a global spatial frame model of a serial chain of straight beams: 12-dof
   Euler–Bernoulli elements in world axes, joints that are fixed, revolute, or revolute
-  with a torsional spring.
+  with a torsional spring;
+* a beam clamped to a hub in the hub's (rotating) frame: axial and bending fields with the
+  geometric stiffness of a given axial force and the Coriolis coupling (:func:`beam_fe`).
 
 Conventions shared by all models:
 
@@ -1002,3 +1004,52 @@ def planar_chain_tangent(
         if _joint_kind(spec, f"joint {i}") == "spring":
             springs.append((dofs[i][0, 2], dofs[i - 1][-1, 2] if i > 0 else -1, float(spec)))
     return tangent(dj, dofs, springs)
+
+
+# ---------------------------------------------------------------------------------------
+# A beam in a rotating frame
+# ---------------------------------------------------------------------------------------
+
+
+def beam_fe(n, N, *, L, EI, EA, rhoA):
+    """``(M, G, K, K_N, fu, fv)`` of a uniform beam clamped at ``s = 0`` (axial ``u``, bending
+    ``v`` in one plane), for its rotating-frame equations about the clamp.
+
+    Axial (linear) and bending (cubic Hermite) fields, consistent matrices by 6-point Gauss
+    quadrature over ``n`` elements of a beam of length ``L`` [m] (``EI`` [N m²], ``EA`` [N],
+    ``rhoA`` [kg/m]); ``N(s)`` [N] is a callable axial force (tension positive).
+
+    ``K_N`` is the geometric stiffness ``∫ N(s) v'² ds`` of the axial force ``N(s)``;
+    ``G = Muvᵀ − Muv`` (the Coriolis coupling: ``2Ω G``); ``fu``, ``fv`` the loads
+    ``∫ ρA s N ds`` on ``u`` and ``v`` (centrifugal per unit Ω², Euler per unit θ̈). Node dofs
+    ``(u, v, θ)``, the root's removed.
+    """
+    le = L / n
+    gx, gw = np.polynomial.legendre.leggauss(6)
+    xi, w = 0.5 * (gx + 1.0), 0.5 * gw * le
+    nd = 3 * (n + 1)
+    Muu, Mvv, Muv, K, KN = (np.zeros((nd, nd)) for _ in range(5))
+    fu, fv = np.zeros(nd), np.zeros(nd)
+    for e in range(n):
+        s = (e + xi) * le
+        Nu, dNu, Nv, dNv, ddNv = (np.zeros((xi.size, nd)) for _ in range(5))
+        Nu[:, 3 * e], Nu[:, 3 * e + 3] = 1.0 - xi, xi
+        dNu[:, 3 * e], dNu[:, 3 * e + 3] = -1.0 / le, 1.0 / le
+        cols = [3 * e + 1, 3 * e + 2, 3 * e + 4, 3 * e + 5]
+        Nv[:, cols] = np.stack([1 - 3 * xi**2 + 2 * xi**3, le * (xi - 2 * xi**2 + xi**3),
+                                3 * xi**2 - 2 * xi**3, le * (xi**3 - xi**2)], axis=1)
+        dNv[:, cols] = np.stack([(6 * xi**2 - 6 * xi) / le, 1 - 4 * xi + 3 * xi**2,
+                                 (6 * xi - 6 * xi**2) / le, 3 * xi**2 - 2 * xi], axis=1)
+        ddNv[:, cols] = np.stack([(12 * xi - 6) / le**2, (6 * xi - 4) / le,
+                                  (6 - 12 * xi) / le**2, (6 * xi - 2) / le], axis=1)
+        Muu += rhoA * np.einsum("k,ki,kj->ij", w, Nu, Nu)
+        Mvv += rhoA * np.einsum("k,ki,kj->ij", w, Nv, Nv)
+        Muv += rhoA * np.einsum("k,ki,kj->ij", w, Nu, Nv)
+        K += EA * np.einsum("k,ki,kj->ij", w, dNu, dNu)
+        K += EI * np.einsum("k,ki,kj->ij", w, ddNv, ddNv)
+        KN += np.einsum("k,k,ki,kj->ij", w, N(s), dNv, dNv)
+        fu += rhoA * np.einsum("k,k,ki->i", w, s, Nu)
+        fv += rhoA * np.einsum("k,k,ki->i", w, s, Nv)
+    keep = np.arange(3, nd)
+    Muu, Mvv, Muv, K, KN = (a[np.ix_(keep, keep)] for a in (Muu, Mvv, Muv, K, KN))
+    return Muu + Mvv, Muv.T - Muv, K, KN, fu[keep], fv[keep]

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 from arms import CHORDWISE, FLAPWISE, rotating_cantilever, table_close
+from reference_fe import beam_fe
 
 from pinflex import FlexibleModel, beam
 from pinflex.cases.spin_up import KANE_URDF, SPIN_UP_S, SpinUp
@@ -30,43 +31,12 @@ OMEGA1 = 1.875104068711961**2 * math.sqrt(1.4e4 / (1.2 * 10.0**4))  # cantilever
 
 
 def rotating_frame_matrices(*, n=10, L=10.0, EI=1.4e4, EA=1.4e7, rhoA=1.2):
-    """``(M, G, K, KG, fu, fv)`` of the beam clamped to the hub, rotating frame (see below).
-
-    Axial (linear) and bending (cubic Hermite) fields, consistent matrices by Gauss quadrature;
-    ``KG`` is the geometric stiffness per unit θ̇² of ``N = ρA (L² − s²)/2``, ``G = Muvᵀ − Muv``
-    the Coriolis/Euler coupling; the root node is clamped; the tip's ``v`` is entry ``-2``.
+    """``(M, G, K, KG, fu, fv)`` of the beam clamped to the hub, rotating frame
+    (:func:`reference_fe.beam_fe`): ``KG`` is the geometric stiffness per unit θ̇² of
+    ``N = ρA (L² − s²)/2``, ``G = Muvᵀ − Muv`` the Coriolis/Euler coupling; the root node is
+    clamped; the tip's ``v`` is entry ``-2``.
     """
-    le = L / n
-    gx, gw = np.polynomial.legendre.leggauss(6)
-    xi, w = 0.5 * (gx + 1), 0.5 * gw * le
-    nd = 3 * (n + 1)
-    Muu, Mvv, Muv, K, KG = (np.zeros((nd, nd)) for _ in range(5))
-    fu, fv = np.zeros(nd), np.zeros(nd)
-    for e in range(n):
-        s = (e + xi) * le
-        Nu, dNu, Nv, dNv, ddNv = (np.zeros((xi.size, nd)) for _ in range(5))
-        Nu[:, 3 * e], Nu[:, 3 * e + 3] = 1 - xi, xi
-        dNu[:, 3 * e], dNu[:, 3 * e + 3] = -1 / le, 1 / le
-        cols = [3 * e + 1, 3 * e + 2, 3 * e + 4, 3 * e + 5]
-        Nv[:, cols] = np.stack([1 - 3 * xi**2 + 2 * xi**3, le * (xi - 2 * xi**2 + xi**3),
-                                3 * xi**2 - 2 * xi**3, le * (-(xi**2) + xi**3)], axis=1)
-        dNv[:, cols] = np.stack([(-6 * xi + 6 * xi**2) / le, 1 - 4 * xi + 3 * xi**2,
-                                 (6 * xi - 6 * xi**2) / le, -2 * xi + 3 * xi**2], axis=1)
-        ddNv[:, cols] = np.stack([(-6 + 12 * xi) / le**2, (-4 + 6 * xi) / le,
-                                  (6 - 12 * xi) / le**2, (-2 + 6 * xi) / le], axis=1)
-        Muu += rhoA * np.einsum("k,ki,kj->ij", w, Nu, Nu)
-        Mvv += rhoA * np.einsum("k,ki,kj->ij", w, Nv, Nv)
-        Muv += rhoA * np.einsum("k,ki,kj->ij", w, Nu, Nv)
-        K += EA * np.einsum("k,ki,kj->ij", w, dNu, dNu) + EI * np.einsum(
-            "k,ki,kj->ij", w, ddNv, ddNv)
-        KG += np.einsum("k,k,ki,kj->ij", w, rhoA * (L**2 - s**2) / 2, dNv, dNv)
-        fu += rhoA * np.einsum("k,k,ki->i", w, s, Nu)
-        fv += rhoA * np.einsum("k,k,ki->i", w, s, Nv)
-    keep = np.arange(3, nd)  # the root node is clamped to the hub
-    Muu, Mvv, Muv, K, KG = (a[np.ix_(keep, keep)] for a in (Muu, Mvv, Muv, K, KG))
-    fu, fv = fu[keep], fv[keep]
-    M = Muu + Mvv
-    return M, Muv.T - Muv, K, KG, fu, fv
+    return beam_fe(n, lambda s: rhoA * (L * L - s * s) / 2.0, L=L, EI=EI, EA=EA, rhoA=rhoA)
 
 
 def rotating_frame_fe(motion, times, *, full, n=10, L=10.0, EI=1.4e4, EA=1.4e7, rhoA=1.2):

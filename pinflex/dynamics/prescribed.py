@@ -56,7 +56,12 @@ from pinflex.dynamics.integrators import (
 )
 from pinflex.dynamics.motion import JointMotion
 from pinflex.dynamics.result import Simulation, SimulationError, check_positive, output_times
-from pinflex.dynamics.speed import check_terms, speed_stiffness
+from pinflex.dynamics.speed import (
+    check_terms,
+    has_levers,
+    locked_speed_stiffness,
+    speed_stiffness,
+)
 from pinflex.dynamics.terms import ErlsDynamics
 from pinflex.erls.validity import VALIDITY_THRESHOLD, Validity
 from pinflex.exceptions import ConfigurationError
@@ -107,9 +112,13 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
                         force=0.0) -> _Coefficients:
     """The locked-joint system (undamped) of the elastic motion on a rigid state.
 
-    ``Zᵀ M Z ẍ + C_L ẋ + Zᵀ K Z x = Zᵀ (F − M [0; q̈] − C(q̇) [0; q̇])`` of the module doc,
-    with ``K_s`` (:func:`pinflex.dynamics.speed.speed_stiffness`) added to ``K`` for
-    ``terms="full"``.
+    ``Zᵀ M Z ẍ + C_L ẋ + Zᵀ K Z x = Zᵀ (F − M [0; q̈] − C(q̇) [0; q̇])`` of the module doc.
+    With ``terms="full"`` the stiffness gains the speed terms: ``Zᵀ K_s Z``
+    (:func:`pinflex.dynamics.speed.speed_stiffness`) when no joint has an elastic offset
+    (``A = 0``: moving joints on rigid links) and no load is held off a beam's axis, else the
+    locked system's second variation
+    (:func:`pinflex.dynamics.speed.locked_speed_stiffness`, with the loads' static state for
+    the forces the joints pass on). ``full`` carries ``K + K_s`` for the motor torques.
 
     Args:
         dyn: Equations of motion.
@@ -130,18 +139,22 @@ def locked_coefficients(dyn: ErlsDynamics, q, qd, qdd, *, terms: str = "eq1",
     Z = np.vstack([np.eye(nx), A])
     K_eq1 = Z.T @ K @ Z
     if terms == "full":
-        from pinflex.dynamics.speed_scope import check_full_terms
-
-        check_full_terms(dyn, q, qd, qdd)  # joints on deforming links: refused by name
-        K = K + speed_stiffness(dyn, q, qd, qdd)
+        K = K + speed_stiffness(dyn, q, qd, qdd)  # the joint rows' terms, for the torques
     C = np.tensordot(qd, Ck, axes=(0, 0))
     zq = np.concatenate([np.zeros(nx), qd])
     Cq = np.stack([Ck[k] @ zq for k in range(nv)], axis=1) if nv else np.zeros((dyn.ndof, 0))
     Ad = np.tensordot(qd, Adk, axes=(0, 0)) if nv else np.zeros((0, nx))
     ML = Z.T @ M @ Z
     CL = Z.T @ (C @ Z + Cq @ A + 2.0 * M[:, nx:] @ Ad)
-    KL = Z.T @ K @ Z if terms == "full" else K_eq1
     rigid = M[:, nx:] @ qdd + C[:, nx:] @ qd + K[:, nx:] @ q
+    KL = K_eq1
+    if terms == "full" and (np.any(A) or has_levers(dyn)):
+        # joints on deforming links or loads held off the beam axes: the second variation of
+        # the locked system, with the loads' static state for the root copies' turn
+        statics = np.linalg.solve(K_eq1, Z.T @ (F - rigid)) if np.any(A) else None
+        KL = K_eq1 + locked_speed_stiffness(dyn, q, qd, qdd, statics)
+    elif terms == "full":
+        KL = Z.T @ K @ Z  # no elastic joint offset: the terms of speed_stiffness are exact
     F = F + force
     return _Coefficients(ML, CL, KL, Z.T @ (F - rigid), A, (M, Ck, K, F), K_eq1)
 
