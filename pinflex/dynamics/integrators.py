@@ -378,7 +378,7 @@ class RichardsonRun:
 
 def richardson_fixed(coeffs, t0: float, t1: float, x0, v0, *, n_steps: int,
                      tol: float | None = None, rho_inf: float = 1.0, grid=None,
-                     max_steps: int = 2_000_000) -> RichardsonRun:
+                     max_steps: int = 2_000_000, stepper=None) -> RichardsonRun:
     """Trapezoidal runs at ``N`` and ``2N`` steps, extrapolated; doubling ``N`` until ``tol``.
 
     With ``tol`` the pair ``(N, 2N)`` is replaced by ``(2N, 4N)`` (the finer run reused) until
@@ -387,18 +387,20 @@ def richardson_fixed(coeffs, t0: float, t1: float, x0, v0, *, n_steps: int,
     ``h^1.5`` (observed order ≥ 1.5: the asymptotic range where the estimate holds; so at
     least three runs); ``max_steps`` bounds the finer run. Without ``tol`` one pair is run and
     its estimate is not checked for the asymptotic range (``observed_order`` NaN): too coarse
-    a ``N`` can then be off by more than its estimate.
+    a ``N`` can then be off by more than its estimate. ``stepper`` replaces :func:`fixed_step`
+    (same arguments and returns).
 
     Raises:
         SimulationError: ``tol`` not met within ``max_steps``.
     """
+    step = fixed_step if stepper is None else stepper
     n = max(2, int(n_steps))
-    coarse = fixed_step(coeffs, t0, t1, n, x0, v0, rho_inf=rho_inf, grid=grid)
+    coarse = step(coeffs, t0, t1, n, x0, v0, rho_inf=rho_inf, grid=grid)
     nfev = n
     ladder: list = []
     diffs: list[float] = []
     while True:
-        fine = fixed_step(coeffs, t0, t1, 2 * n, x0, v0, rho_inf=rho_inf, grid=grid)
+        fine = step(coeffs, t0, t1, 2 * n, x0, v0, rho_inf=rho_inf, grid=grid)
         nfev += 2 * n
         d = fine[1][::2] - coarse[1]
         scale = max(float(np.abs(fine[1]).max()), 1e-300)

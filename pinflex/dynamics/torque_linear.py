@@ -22,19 +22,23 @@ dependence of the terms, which eq. (1)'s prescribed drive leaves out); the joint
 servo's. The motor torque does no work on ``Tᵀ``'s elastic rows, so with ``k_p → ∞`` the route
 tends to the prescribed drive.
 
-Integration, as the prescribed drive: coefficients exact on a grid (at most 5 ms spacing, at
-least 2 points per sample interval), cubic splines in time in between, the trapezoidal rule at
-``N`` and ``2N`` uniform steps, Richardson-extrapolated (``Simulation.error_estimate`` the
-estimate of the finer run's step error); after the stop the system is constant and propagated
-exactly (eigenvectors of its state matrix).
+Integration: coefficients exact on a grid (at most 5 ms spacing, at least 2 points per sample
+interval), cubic splines in time in between, the trapezoidal rule at ``N`` and ``2N`` uniform
+steps (:func:`residual_steps`: each step solved from its own residual with the interpolated
+coefficients, not from interpolated step operators), Richardson-extrapolated; after the stop
+the system is constant and propagated exactly (eigenvectors of its state matrix).
+``Simulation.error_estimate`` is the Richardson estimate of the finer run's error plus the
+motion found in the modes the steps do not resolve (:func:`unresolved_content`: ``|λ| h ≥ 1``,
+beyond their quasi-static share): a Richardson pair misrepresents such modes in both runs
+alike and cannot see them.
 
 Its own error estimate (``Simulation.linearisation_error``): the residual ``ρ = Tᵀ R`` of the
 *nonlinear* equations is evaluated along the linear solution at a uniform grid (step about
-``RESIDUAL_STRIDE × (motion / N)``, the stop and the hold included), and the linear system is solved once
-more with ``−ρ`` as its load: that correction ``Δ`` is the linearisation error of ``w`` to
-leading order (one Newton step on the whole run); ``max |Δx| / max |x|`` is reported and the
-linear solution ``w`` returned (not corrected: see below). Above ``threshold`` (default
-:data:`LINEARISATION_THRESHOLD`) the route warns with
+``RESIDUAL_STRIDE × (motion / N)``, the stop and the hold included), and the linear system is
+solved once more with ``−ρ`` as its load: that correction ``Δ`` is the linearisation error
+of ``w`` to leading order (one Newton step on the whole run); ``max |Δx| / max |x|`` is
+reported and the linear solution ``w`` returned (not corrected: see below). Above
+``threshold`` (default :data:`LINEARISATION_THRESHOLD`) the route warns with
 :class:`~pinflex.exceptions.LinearisationWarning` (``strict``:
 :class:`~pinflex.exceptions.LinearisationError`): the motion strays too far from the rigid
 computed-torque motion (a slow servo on a fast motion, large deflections) and
@@ -48,12 +52,18 @@ is 0.29 % off (tip 0.88 %) while the estimate says 34 %: the residual samples al
 products of the fast elastic rates (the motor's stiff modes), so the estimate errs on the safe
 side there, and adding ``Δ`` to the result would make it worse; hence ``w`` is returned.
 
-Limitation (measured, not yet handled): a stiff servo puts lightly damped modes near
-100 000 rad/s at the motors (the first element's local motion against ``k_p``) and a damped one
-near −1.8·10⁶ 1/s (``k_d`` on it), which the default steps do not resolve and both Richardson
-runs misrepresent alike. On benchmark A's whole servo run (kp 3000, kd 30) the default steps
-differ from 8x the steps by 1.1 % of the tip peak (0.5 % of the largest elastic coordinate)
-while the Richardson estimate says 1.9e-4; ``tol`` ladders do not converge there.
+Stiff modes: a servo puts modes near 100 000 rad/s and a damped one near −1.8·10⁶ 1/s at the
+motors (benchmark A, kp 3000, kd 30), far beyond the default 0.4 ms steps. Driven smoothly they
+follow the motion quasi-statically, which the trapezoidal rule reproduces when each step is
+solved from its residual: benchmark A's whole servo run at the default steps is 3.1e-6 of
+the largest elastic coordinate from the same equations at 256x the steps (estimate 1.1e-4).
+Interpolating the step operators instead (as the prescribed drive does, harmless there) put
+an error of fixed size into every step, so the runs drifted further off the finer the steps
+(2.5 % at 128x) while Richardson saw nothing. Started off the reference, or kicked, the
+stiff modes ring: the result is then as wrong as that ringing is large and the estimate says
+so (``tests/test_torque_linear.py``: a hub beam whose servo snaps by 1 mrad, 39 % off the
+assumed-modes reference, estimate 58 %); with ``tol`` the steps are halved until the estimate
+meets it.
 """
 
 from __future__ import annotations
@@ -79,14 +89,17 @@ LINEARISATION_THRESHOLD = 1e-2
 #: trajectory sample interval), as the prescribed drive's default grid.
 GRID_SPACING_S = 5e-3
 #: High-frequency spectral radius of the generalized-α steps (1: the trapezoidal rule, whose
-#: error expansion Richardson assumes). Measured on benchmark A's whole servo run: 0.5 and 0
-#: change neither the difference from 8x the steps (0.45 %, 0.34 % against 0.50 %) nor the
-#: estimates.
+#: error expansion Richardson assumes).
 RHO_INF = 1.0
 #: Spacing of the residual samples of the linearisation estimate, in coarse steps of the
 #: motion. Benchmark A's whole servo run: estimate 1.30e-2 at 2 (and 1.30e-2 with 8x the
 #: steps), about 0.1 CPU-s per simulated second less at 4.
 RESIDUAL_STRIDE = 4
+#: Instants of the motion at which :func:`unresolved_content` looks for motion in the modes
+#: the steps do not resolve.
+UNRESOLVED_CHECKS = 64
+#: Largest number of steps of the finer run of a ``tol`` ladder.
+MAX_STEPS = 2_000_000
 
 
 class ServoLinearisation:
@@ -273,6 +286,95 @@ def _spline_system(lin: ServoLinearisation, grid: np.ndarray):
     return coeffs, packed[-1]
 
 
+def residual_steps(coeffs, t0: float, t1: float, n_steps: int, x0, v0, *,
+                   rho_inf: float = 1.0, grid=None, chunk: int = 512):
+    """Generalized-α at ``n_steps`` uniform steps, each solved from its own residual.
+
+    The same scheme as :func:`pinflex.dynamics.integrators.fixed_step` (``grid`` is accepted
+    and not used), written so that every step is the scheme applied exactly to the
+    coefficients ``coeffs`` returns: ``a_{n+1} = lhs⁻¹ (f − Q [x_n; v_n; a_n])`` with ``Q =
+    [K, C + (1−α_f) h K, α_m M + (1−α_f)((1−γ) h C + (½−β) h² K)]`` and ``lhs = (1−α_m) M +
+    (1−α_f)(γ h C + β h² K)``, both formed at each step from the interpolated coefficients
+    (``lhs`` inverted in batches). Interpolating the step operators themselves in time
+    (``fixed_step``'s ``grid``) breaks the balance ``K x ≈ f`` of the stiff modes (entries
+    of size 1/h² that no longer cancel): on benchmark A's servo run its error grew with the
+    number of steps (2.5 % of the largest elastic coordinate at 128x the default steps) while
+    the steps' own error fell; here it falls as h² (5.6e-6 at 8x, 8e-8 at 64x). Returns
+    ``(t, x, v, a)`` at the ``n_steps + 1`` grid points.
+    """
+    if not 0.0 <= rho_inf <= 1.0:
+        raise ConfigurationError(f"rho_inf = {rho_inf!r} must lie in [0, 1]")
+    n_steps = int(n_steps)
+    am = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0)
+    af = rho_inf / (rho_inf + 1.0)
+    gamma = 0.5 - am + af
+    beta = 0.25 * (1.0 - am + af) ** 2
+    t = np.linspace(t0, t1, n_steps + 1)
+    h = (t1 - t0) / n_steps
+    x = np.asarray(x0, dtype=float)
+    v = np.asarray(v0, dtype=float)
+    m = x.size
+    M0, C0, K0, f0 = coeffs(np.array([t0]))
+    a = np.linalg.solve(M0[0], f0[0] - C0[0] @ v - K0[0] @ x)
+    b2, bh, g1, gh = (0.5 - beta) * h * h, beta * h * h, (1.0 - gamma) * h, gamma * h
+    S = np.empty((n_steps + 1, 3 * m))
+    S[0, :m], S[0, m:2 * m], S[0, 2 * m:] = x, v, a
+    eye = np.eye(m)
+    B = np.zeros((3 * m, 3 * m))
+    B[:m, :m], B[:m, m:2 * m], B[:m, 2 * m:] = eye, h * eye, b2 * eye
+    B[m:2 * m, m:2 * m], B[m:2 * m, 2 * m:] = eye, g1 * eye
+    B[2 * m:, 2 * m:] = 0.0
+    w = np.concatenate([np.full(m, bh), np.full(m, gh), np.ones(m)])
+    rep = np.tile(np.arange(m), 3)
+    for s0 in range(0, n_steps, chunk):
+        s1 = min(n_steps, s0 + chunk)
+        M, C, K, f = coeffs(t[s0:s1] + (1.0 - af) * h)
+        lhs = (1.0 - am) * M + (1.0 - af) * (gamma * h * C + beta * h * h * K)
+        L = np.linalg.inv(lhs)
+        Q = np.concatenate([K, C + (1.0 - af) * h * K,
+                            am * M + (1.0 - af) * ((1.0 - gamma) * h * C
+                                                   + (0.5 - beta) * h * h * K)], axis=2)
+        for k in range(s1 - s0):
+            row = S[s0 + k]
+            a1 = L[k] @ (f[k] - Q[k] @ row)
+            np.add(B @ row, w * a1[rep], out=S[s0 + k + 1])
+    return t, S[:, :m], S[:, m:2 * m], S[:, 2 * m:]
+
+
+def unresolved_content(coeffs, t, y, h: float, nx: int, *, checks: int = UNRESOLVED_CHECKS):
+    """Largest elastic displacement carried by the modes the steps do not resolve.
+
+    At up to ``checks`` of the run's step times ``t`` (evenly spread, the last one
+    included), the frozen state matrix ``Ā`` of ``ẏ = Ā y + b̄`` (``y = [w; ẇ]``) is split
+    into its modes (``Ā = V Λ V⁻¹``); those with ``|λ| h ≥ 1`` are beyond the step ``h``
+    (the trapezoidal rule turns their motion into a ringing near the step's Nyquist
+    frequency, and both runs of a Richardson pair alike). Their content in the state,
+    less what they carry quasi-statically (``−(V⁻¹ (b̄ − dȳ_s/dt))_k / λ_k``, with ``ȳ_s =
+    −Ā⁻¹ b̄`` the frozen equilibrium, differenced in time), is their dynamic motion, which
+    the steps misrepresent; the largest elastic part, ``max |Re V_x c|``, is returned
+    (absolute, in the units of ``x``). ``y`` holds the states (n, 2 m) at ``t``.
+    """
+    n = t.size
+    idx = np.unique(np.round(np.linspace(0, n - 1, min(n, max(2, int(checks))))).astype(int))
+    worst = 0.0
+    dt = max(0.25 * h, 1e-9)
+    for i in idx:
+        ti = float(t[i])
+        M, C, K, f = coeffs(np.array([ti - dt, ti, ti + dt]))
+        systems = [_state_matrix(M[k], C[k], K[k], f[k]) for k in range(3)]
+        A, b = systems[1]
+        lam, V = np.linalg.eig(A)
+        stiff = np.abs(lam) * h >= 1.0
+        if not np.any(stiff):
+            continue
+        ys_m = -np.linalg.solve(systems[0][0], systems[0][1])
+        ys_p = -np.linalg.solve(systems[2][0], systems[2][1])
+        c = np.linalg.solve(V, np.column_stack([y[i], b - (ys_p - ys_m) / (2.0 * dt)]))
+        dyn_part = c[stiff, 0] + c[stiff, 1] / lam[stiff]
+        worst = max(worst, float(np.abs((V[:nx, stiff] @ dyn_part).real).max()))
+    return worst
+
+
 def _state_matrix(M, C, K, f):
     nd = M.shape[0]
     H = np.linalg.solve(M, np.hstack([K, C, f[:, None]]))
@@ -340,13 +442,27 @@ def simulate_torque_linear(dyn: ErlsDynamics, motion: JointMotion, *, duration_s
     estimate, order = float("nan"), float("nan")
     if tm > 0.0:
         n0 = steps if steps is not None else max(8, int(np.ceil(tm * sample_hz / 2.0)))
-        rr = richardson_fixed(coeffs, 0.0, tm, w0, wd0, n_steps=int(n0), tol=tol, grid=grid,
-                              rho_inf=RHO_INF)
-        estimate, order = rr.error_estimate, rr.observed_order
+        n_try = int(n0)
+        while True:
+            rr = richardson_fixed(coeffs, 0.0, tm, w0, wd0, n_steps=n_try, tol=tol,
+                                  rho_inf=RHO_INF, stepper=residual_steps)
+            nfev += rr.nfev
+            # motion in the modes beyond the coarser run's step, which Richardson cannot see
+            h_coarse = 2.0 * tm / rr.steps
+            unresolved = unresolved_content(coeffs, rr.t, np.hstack([rr.x, rr.v]), h_coarse,
+                                            nx) / max(float(np.abs(rr.x[:, :nx]).max()), 1e-300)
+            estimate, order = rr.error_estimate + unresolved, rr.observed_order
+            if tol is None or estimate <= tol:
+                break
+            if 2 * rr.steps > MAX_STEPS:
+                raise SimulationError(
+                    f"the time step needed for tol = {tol:g} exceeds {MAX_STEPS} steps "
+                    f"(estimate {estimate:.3g} at {rr.steps} steps, of which {unresolved:.3g} "
+                    "in modes the steps do not resolve): loosen tol or shorten the motion")
+            n_try = rr.steps
         run = NewmarkRun(rr.t, rr.x, rr.v, rr.v, rr.nfev)
-        nfev += rr.nfev
         y_stop = rr.y_end
-        h_motion = tm / int(n0)
+        h_motion = h_coarse
         n_steps = rr.steps
     else:
         y_stop = np.concatenate([w0, wd0])
